@@ -1,0 +1,86 @@
+// agex_keypoints: AGEX interest points of one depth frame.
+// Runs the depth pipeline (denoise, mixed pixels, crop, floor, meshes, AGEX) and
+// writes the points as JSON and an overlay PNG.
+
+#include <agex/apps/depth_pipeline.h>
+#include <agex/apps/output.h>
+#include <agex/common/atomic_file.h>
+#include <agex/common/frame_io.h>
+
+#include <boost/program_options.hpp>
+
+#include <iostream>
+
+namespace po = boost::program_options;
+
+int
+main (int argc, char **argv)
+{
+  agex::FrameOptions frame_options;
+  agex::apps::PipelineParams params;
+  std::vector<std::string> vector_flags;
+  std::string input, json_path, overlay_path;
+
+  po::options_description general ("agex_keypoints INPUT [options]\n"
+                                    "AGEX interest points of a depth frame (.pcd, .png or .u16)");
+  general.add_options () ("help,h", "show this help") ("input", po::value (&input), "frame file")
+    ("json", po::value (&json_path), "write the points as JSON here")
+    ("overlay", po::value (&overlay_path), "write an overlay PNG here");
+  po::options_description all;
+  all.add (general).add (agex::apps::frameOptionsDescription (frame_options))
+     .add (agex::apps::pipelineOptionsDescription (params, vector_flags));
+  po::positional_options_description positional;
+  positional.add ("input", 1);
+
+  try
+  {
+    po::variables_map vm;
+    po::store (po::command_line_parser (argc, argv).options (all).positional (positional).run (), vm);
+    if (vm.count ("help"))
+    {
+      std::cout << all << "\n";
+      return 0;
+    }
+    po::notify (vm);
+    if (input.empty ())
+      throw std::runtime_error ("no INPUT frame given (see --help)");
+    agex::apps::finishPipelineOptions (vector_flags, params);
+    for (const auto &out : {json_path, overlay_path})
+      if (!out.empty ())
+        agex::checkOutputIsNotInput (out, {input});
+
+    const agex::Frame frame = agex::loadFrame (input, frame_options);
+    const agex::apps::PipelineResult result = agex::apps::runDepthPipeline (frame.cloud, params);
+
+    nlohmann::json doc;
+    doc["frame"] = input;
+    doc["width"] = frame.cloud->width;
+    doc["height"] = frame.cloud->height;
+    doc["meshes"] = result.meshes.size ();
+    doc["mesh_points"] = nlohmann::json::array ();
+    for (const auto &mesh : result.meshes)
+      doc["mesh_points"].push_back (mesh.indices.size ());
+    doc["interest_points"] = nlohmann::json::array ();
+    for (const auto &p : result.interest_points)
+      doc["interest_points"].push_back (agex::apps::interestPointJson (p));
+    doc["ms"] = nlohmann::json::object ();
+    for (const auto &[stage, ms] : result.ms)
+      doc["ms"][stage] = ms;
+    if (!json_path.empty ())
+      agex::apps::writeJson (json_path, doc);
+    if (!overlay_path.empty ())
+      agex::apps::writePng (overlay_path,
+                            agex::apps::renderOverlay (*frame.cloud, result.meshes, result.interest_points));
+
+    std::cout << input << ": " << result.meshes.size () << " meshes, " << result.interest_points.size ()
+              << " interest points, " << result.ms.back ().second << " ms\n";
+    if (json_path.empty ())
+      std::cout << doc.dump (2) << "\n";
+    return 0;
+  }
+  catch (const std::exception &e)
+  {
+    std::cerr << "agex_keypoints: error: " << e.what () << "\n";
+    return 1;
+  }
+}

@@ -1,0 +1,38 @@
+#pragma once
+// What the apps write: JSON documents and overlay PNGs, always atomically.
+
+#include <agex/common/point_types.h>
+
+#include <pcl/PointIndices.h>
+#include <pcl/point_cloud.h>
+#include <pcl/point_types.h>
+
+#include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
+
+#include <string>
+#include <vector>
+
+namespace agex
+{
+namespace apps
+{
+/** Writes a JSON document atomically (pretty-printed, trailing newline). */
+void writeJson (const std::string &path, const nlohmann::json &doc);
+
+/** Encodes and writes a PNG atomically. \throws std::runtime_error on failure */
+void writePng (const std::string &path, const cv::Mat &image);
+
+/** An interest point as the apps' JSON shows it. */
+nlohmann::json interestPointJson (const agex::InterestPoint &p);
+
+/** \brief Draws the depth frame (grey, near = bright), the kept meshes tinted,
+  * and each interest point as a disc coloured by rank with an orientation arrow. */
+cv::Mat renderOverlay (const pcl::PointCloud<pcl::PointXYZ> &frame,
+                       const std::vector<pcl::PointIndices> &meshes,
+                       const pcl::PointCloud<agex::InterestPoint> &points);
+
+/** Colour (BGR) for a 1-based rank, shared by the overlay and its legend. */
+cv::Scalar rankColour (int rank);
+}  // namespace apps
+}  // namespace agex

@@ -1,0 +1,301 @@
+#include <agex/apps/depth_pipeline.h>
+
+#include <agex/filters/mixed_pixel_filter.h>
+#include <agex/filters/surface_segmentation.h>
+#include <agex/keypoints/agex_keypoint.h>
+
+#include <pcl/ModelCoefficients.h>
+#include <pcl/console/print.h>
+#include <pcl/filters/crop_box.h>
+#include <pcl/filters/median_filter.h>
+#include <pcl/sample_consensus/method_types.h>
+#include <pcl/sample_consensus/model_types.h>
+#include <pcl/segmentation/sac_segmentation.h>
+
+#include <boost/program_options.hpp>
+
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+
+namespace po = boost::program_options;
+
+namespace agex
+{
+namespace apps
+{
+namespace
+{
+using Cloud = pcl::PointCloud<pcl::PointXYZ>;
+using Clock = std::chrono::steady_clock;
+
+double
+msSince (Clock::time_point start)
+{
+  return std::chrono::duration<double, std::milli> (Clock::now () - start).count ();
+}
+
+void
+invalidate (pcl::PointXYZ &p)
+{
+  p.x = p.y = p.z = std::numeric_limits<float>::quiet_NaN ();
+}
+
+pcl::IndicesPtr
+finiteIndices (const Cloud &cloud, int stride = 1)
+{
+  pcl::IndicesPtr indices (new pcl::Indices);
+  int seen = 0;
+  for (std::size_t i = 0; i < cloud.size (); ++i)
+    if (std::isfinite (cloud[i].z) && (seen++ % stride) == 0)
+      indices->push_back (static_cast<int> (i));
+  return indices;
+}
+
+Eigen::Vector3f
+parseVector (const std::string &flag, const std::string &text)
+{
+  std::stringstream in (text);
+  Eigen::Vector3f v;
+  char c1 = 0, c2 = 0;
+  if (!(in >> v.x () >> c1 >> v.y () >> c2 >> v.z ()) || c1 != ',' || c2 != ',' || !(in >> std::ws).eof () ||
+      !v.allFinite ())
+    throw std::runtime_error ("--" + flag + ": expected three numbers as x,y,z, got '" + text + "'");
+  return v;
+}
+
+std::string
+formatVector (const Eigen::Vector3f &v)
+{
+  std::ostringstream out;
+  out << v.x () << "," << v.y () << "," << v.z ();
+  return out.str ();
+}
+}  // namespace
+
+PipelineResult
+runDepthPipeline (const pcl::PointCloud<pcl::PointXYZ>::ConstPtr &input, const PipelineParams &params)
+{
+  PipelineResult result;
+  Cloud::Ptr cloud (new Cloud (*input));
+
+  // 1. Mixed pixels, on the full frame so that both sides of every jump are seen
+  // (after the crop the far side of a silhouette would already be gone).
+  auto start = Clock::now ();
+  if (params.remove_mixed_pixels && cloud->isOrganized ())
+  {
+    agex::MixedPixelFilter<pcl::PointXYZ> mixed (true);
+    mixed.setInputCloud (cloud);
+    mixed.setWindowRadius (params.mixed_window_radius);
+    mixed.setMinJump (params.mixed_min_jump);
+    mixed.setMaxVeilAngle (params.mixed_max_veil_angle_deg);
+    mixed.setNegative (true);  // we want the mixed pixels themselves, to blank them
+    pcl::Indices flying;
+    mixed.filter (flying);
+    for (const auto i : flying)
+      invalidate ((*cloud)[i]);
+    result.mixed_pixels_removed = static_cast<int> (flying.size ());
+  }
+  result.ms.emplace_back ("mixed_pixels", msSince (start));
+
+  // 2. Bounding box, keeping the frame organized.
+  start = Clock::now ();
+  {
+    pcl::CropBox<pcl::PointXYZ> crop (true);
+    crop.setInputCloud (cloud);
+    crop.setMin (Eigen::Vector4f (params.crop_min.x (), params.crop_min.y (), params.crop_min.z (), 1.f));
+    crop.setMax (Eigen::Vector4f (params.crop_max.x (), params.crop_max.y (), params.crop_max.z (), 1.f));
+    crop.setKeepOrganized (true);
+    Cloud::Ptr cropped (new Cloud);
+    crop.filter (*cropped);
+    if (cropped->size () == cloud->size ())  // CropBox outputs nothing for an empty input
+      cloud = cropped;
+  }
+  result.ms.emplace_back ("crop", msSince (start));
+
+  // 3. Denoise depth inside the box only, which is most of the frame's cost saved.
+  // pcl::MedianFilter moves z only; rescaling x and y keeps the point on its
+  // pixel's viewing ray.
+  start = Clock::now ();
+  if (params.median_window > 1 && cloud->isOrganized ())
+  {
+    pcl::MedianFilter<pcl::PointXYZ> median;
+    median.setInputCloud (cloud);
+    median.setWindowSize (params.median_window);
+    median.setMaxAllowedMovement (params.median_max_movement);
+    Cloud::Ptr smoothed (new Cloud);
+    median.filter (*smoothed);
+    for (std::size_t i = 0; i < smoothed->size (); ++i)
+    {
+      const float z0 = (*cloud)[i].z, z1 = (*smoothed)[i].z;
+      if (std::isfinite (z0) && z0 > 0.f && z1 != z0)
+      {
+        (*smoothed)[i].x *= z1 / z0;
+        (*smoothed)[i].y *= z1 / z0;
+      }
+    }
+    cloud = smoothed;
+  }
+  result.ms.emplace_back ("denoise", msSince (start));
+
+  // 4. Floor: RANSAC for a plane whose normal is within the tilt limit of "up",
+  // then every point on or below it goes, including the soles where feet touch it.
+  start = Clock::now ();
+  if (params.remove_floor)
+  {
+    // Every 4th point is plenty for RANSAC and keeps the stage cheap.
+    pcl::IndicesPtr sample = finiteIndices (*cloud, 4);
+    if (static_cast<int> (sample->size ()) >= params.floor_min_inliers)
+    {
+      pcl::SACSegmentation<pcl::PointXYZ> sac;
+      sac.setInputCloud (cloud);
+      sac.setIndices (sample);
+      sac.setModelType (pcl::SACMODEL_PERPENDICULAR_PLANE);
+      sac.setMethodType (pcl::SAC_RANSAC);
+      sac.setAxis (params.up);
+      sac.setEpsAngle (params.floor_max_tilt_deg * M_PI / 180.0);
+      sac.setDistanceThreshold (params.floor_distance);
+      sac.setMaxIterations (1000);
+      pcl::PointIndices inliers;
+      pcl::ModelCoefficients coefficients;
+      // A frame without a floor in view is normal here, not an error worth printing.
+      const auto verbosity = pcl::console::getVerbosityLevel ();
+      pcl::console::setVerbosityLevel (pcl::console::L_ALWAYS);
+      sac.segment (inliers, coefficients);
+      pcl::console::setVerbosityLevel (verbosity);
+      if (static_cast<int> (inliers.indices.size ()) >= params.floor_min_inliers / 4 &&
+          coefficients.values.size () == 4)
+      {
+        Eigen::Vector4f plane (coefficients.values[0], coefficients.values[1], coefficients.values[2],
+                               coefficients.values[3]);
+        plane /= plane.head<3> ().norm ();
+        if (plane.head<3> ().dot (params.up) < 0.f)
+          plane = -plane;  // normal points up: signed distance > 0 above the floor
+        result.floor_found = true;
+        result.floor_plane = plane;
+        for (auto &p : cloud->points)
+          if (std::isfinite (p.z) && plane.head<3> ().dot (p.getVector3fMap ()) + plane[3] < params.floor_distance)
+            invalidate (p);
+      }
+    }
+  }
+  result.ms.emplace_back ("floor", msSince (start));
+
+  // 5. Surface meshes.
+  start = Clock::now ();
+  const int min_mesh = params.min_mesh_size >= 0
+                           ? params.min_mesh_size
+                           : std::max (1, static_cast<int> (cloud->size () / 1000));
+  if (cloud->isOrganized ())
+  {
+    agex::SurfaceSegmentation<pcl::PointXYZ> segmentation;
+    segmentation.setInputCloud (cloud);
+    segmentation.setDeltaConnected (params.delta_connected);
+    segmentation.setMinMeshSize (static_cast<std::size_t> (min_mesh));
+    segmentation.segment (result.meshes);
+  }
+  result.ms.emplace_back ("segmentation", msSince (start));
+
+  // 6. AGEX interest points per mesh.
+  start = Clock::now ();
+  if (cloud->isOrganized ())
+  {
+    agex::AGEXKeypoint<pcl::PointXYZ, agex::InterestPoint> agex;
+    agex.setInputCloud (cloud);
+    agex.setMeshes (result.meshes);
+    agex.setPointsPerMesh (params.k);
+    agex.setDeltaConnected (params.delta_connected);
+    agex.setDeltaOrient (params.delta_orient);
+    agex.setMinMeshSize (static_cast<std::size_t> (min_mesh));
+    agex.setMode (params.naive ? agex::AGEXKeypoint<pcl::PointXYZ>::Mode::Naive
+                               : agex::AGEXKeypoint<pcl::PointXYZ>::Mode::Incremental);
+    agex.compute (result.interest_points);
+  }
+  result.ms.emplace_back ("agex", msSince (start));
+
+  double total = 0.0;
+  for (const auto &stage : result.ms)
+    total += stage.second;
+  result.ms.emplace_back ("total", total);
+  result.filtered = cloud;
+  return result;
+}
+
+po::options_description
+frameOptionsDescription (FrameOptions &options)
+{
+  po::options_description desc ("Frame input (depth images; defaults: Kinect, see ../shared/README.md)");
+  desc.add_options ()
+    ("fx", po::value (&options.intrinsics.fx)->default_value (options.intrinsics.fx), "focal length x, pixels")
+    ("fy", po::value (&options.intrinsics.fy)->default_value (options.intrinsics.fy), "focal length y, pixels")
+    ("cx", po::value (&options.intrinsics.cx)->default_value (options.intrinsics.cx), "principal point x, pixels")
+    ("cy", po::value (&options.intrinsics.cy)->default_value (options.intrinsics.cy), "principal point y, pixels")
+    ("depth-scale", po::value (&options.depth_scale)->default_value (0.0, "auto"),
+     "metres per depth unit; auto: 0.016 for 8-bit PNG (Bonn), 0.001 for 16-bit PNG and .u16")
+    ("width", po::value (&options.width)->default_value (options.width), "width of a raw .u16 frame")
+    ("height", po::value (&options.height)->default_value (options.height), "height of a raw .u16 frame");
+  return desc;
+}
+
+po::options_description
+pipelineOptionsDescription (PipelineParams &p, std::vector<std::string> &storage)
+{
+  storage.assign (3, std::string ());
+  storage[0] = formatVector (p.crop_min);
+  storage[1] = formatVector (p.crop_max);
+  storage[2] = formatVector (p.up);
+  po::options_description desc ("Pipeline (defaults isolate a person 1.3-2.6 m in front of the sensor,\n"
+                                 "within 0.75 m of its optical axis, as in the Bonn frames)");
+  desc.add_options ()
+    ("k", po::value (&p.k)->default_value (p.k), "AGEX points per mesh, centroid included")
+    ("delta-connected", po::value (&p.delta_connected)->default_value (p.delta_connected),
+     "largest 3D gap between connected neighbour pixels, metres")
+    ("delta-orient", po::value (&p.delta_orient)->default_value (p.delta_orient),
+     "geodesic distance traced back for orientations, metres")
+    ("min-mesh-size", po::value (&p.min_mesh_size)->default_value (p.min_mesh_size, "auto"),
+     "smallest mesh in points; auto: 0.1% of the frame's pixels")
+    ("median-window", po::value (&p.median_window)->default_value (p.median_window),
+     "median filter window in pixels (0 or 1: off)")
+    ("median-max-movement", po::value (&p.median_max_movement)->default_value (p.median_max_movement),
+     "largest depth change the median may make, metres")
+    ("no-mixed-pixel-removal", po::bool_switch ()->notifier ([&p] (bool off) { p.remove_mixed_pixels = !off; }),
+     "keep mixed pixels")
+    ("mixed-window", po::value (&p.mixed_window_radius)->default_value (p.mixed_window_radius),
+     "mixed-pixel neighbour radius, pixels")
+    ("mixed-min-jump", po::value (&p.mixed_min_jump)->default_value (p.mixed_min_jump),
+     "smallest depth jump with mixed pixels, metres")
+    ("mixed-max-angle", po::value (&p.mixed_max_veil_angle_deg)->default_value (p.mixed_max_veil_angle_deg),
+     "largest angle between a jump and the viewing ray, degrees")
+    ("crop-min", po::value (&storage[0])->default_value (storage[0]), "bounding box minimum x,y,z, metres")
+    ("crop-max", po::value (&storage[1])->default_value (storage[1]), "bounding box maximum x,y,z, metres")
+    ("no-floor-removal", po::bool_switch ()->notifier ([&p] (bool off) { p.remove_floor = !off; }),
+     "keep the floor")
+    ("up", po::value (&storage[2])->default_value (storage[2]), "the world's up direction in camera axes")
+    ("floor-max-tilt", po::value (&p.floor_max_tilt_deg)->default_value (p.floor_max_tilt_deg),
+     "largest angle between the floor normal and up, degrees")
+    ("floor-distance", po::value (&p.floor_distance)->default_value (p.floor_distance),
+     "points closer than this to the floor plane are removed, metres")
+    ("naive", po::bool_switch (&p.naive), "reference AGEX: a full Dijkstra per point");
+  return desc;
+}
+
+void
+finishPipelineOptions (const std::vector<std::string> &storage, PipelineParams &params)
+{
+  params.crop_min = parseVector ("crop-min", storage.at (0));
+  params.crop_max = parseVector ("crop-max", storage.at (1));
+  params.up = parseVector ("up", storage.at (2));
+  if ((params.crop_max - params.crop_min).minCoeff () <= 0.f)
+    throw std::runtime_error ("--crop-min must be below --crop-max on every axis");
+  if (params.up.norm () == 0.f)
+    throw std::runtime_error ("--up must be a non-zero vector");
+  params.up.normalize ();
+  if (params.k < 1)
+    throw std::runtime_error ("--k must be at least 1");
+  if (!(params.delta_connected > 0.f) || !(params.delta_orient >= 0.f))
+    throw std::runtime_error ("--delta-connected must be > 0 and --delta-orient >= 0");
+}
+}  // namespace apps
+}  // namespace agex

@@ -1,0 +1,27 @@
+# agex_add_module(<name> SOURCES ... DEPENDS ...)
+# One shared library per module, libagex_<name>, with its public headers in
+# <module>/include. Use it as agex::<name> (the target itself is agex_<name>_lib so
+# that apps may be called agex_<name>).
+function(agex_add_module name)
+  cmake_parse_arguments(ARG "" "" "SOURCES;DEPENDS" ${ARGN})
+  set(target agex_${name}_lib)
+  add_library(${target} ${ARG_SOURCES})
+  add_library(agex::${name} ALIAS ${target})
+  target_include_directories(${target} PUBLIC
+    $<BUILD_INTERFACE:${CMAKE_CURRENT_SOURCE_DIR}/include>
+    $<INSTALL_INTERFACE:include>)
+  target_include_directories(${target} SYSTEM PUBLIC ${PCL_INCLUDE_DIRS})
+  target_compile_definitions(${target} PUBLIC ${PCL_DEFINITIONS})
+  target_link_libraries(${target} PUBLIC ${ARG_DEPENDS})
+  target_compile_options(${target} PRIVATE -Wall -Wextra)
+  set_target_properties(${target} PROPERTIES OUTPUT_NAME agex_${name} EXPORT_NAME ${name}
+    VERSION ${PROJECT_VERSION} SOVERSION ${PROJECT_VERSION_MAJOR}.${PROJECT_VERSION_MINOR})
+endfunction()
+
+# agex_add_app(<name> SOURCES ... DEPENDS ...): an executable in <build>/bin.
+function(agex_add_app name)
+  cmake_parse_arguments(ARG "" "" "SOURCES;DEPENDS" ${ARGN})
+  add_executable(${name} ${ARG_SOURCES})
+  target_link_libraries(${name} PRIVATE ${ARG_DEPENDS})
+  target_compile_options(${name} PRIVATE -Wall -Wextra)
+endfunction()

@@ -1,0 +1,18 @@
+#pragma once
+// Outputs are written atomically: a temporary file in the same directory, then
+// rename(2), so a crash or a full disk never leaves a half-written file behind
+// and an earlier good output survives a failed run.
+
+#include <string>
+#include <vector>
+
+namespace agex
+{
+/** \brief Writes bytes to path atomically.
+  * \throws std::runtime_error naming the path and the reason on failure */
+void writeFileAtomic (const std::string &path, const std::string &bytes);
+
+/** \brief Throws std::runtime_error if output names the same file as any input
+  * (so an app never overwrites what it reads). */
+void checkOutputIsNotInput (const std::string &output, const std::vector<std::string> &inputs);
+}  // namespace agex

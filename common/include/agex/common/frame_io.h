@@ -1,0 +1,91 @@
+#pragma once
+// Frame input shared by every app: organized PCD files, 8/16-bit depth PNGs and
+// raw little-endian uint16 (.u16) depth, all turned into an organized
+// pcl::PointCloud<pcl::PointXYZ> in metres with NaN for invalid pixels.
+
+#include <pcl/point_cloud.h>
+#include <pcl/point_types.h>
+
+#include <opencv2/core.hpp>
+
+#include <stdexcept>
+#include <string>
+
+namespace agex
+{
+/** Pinhole intrinsics in pixels. Defaults: the Kinect values (../shared/README.md). */
+struct CameraIntrinsics
+{
+  double fx = 525.0;
+  double fy = 525.0;
+  double cx = 319.5;
+  double cy = 239.5;
+};
+
+/** How to interpret a depth image. */
+struct FrameOptions
+{
+  CameraIntrinsics intrinsics;
+  /** Metres per depth unit; 0 picks the format's default: 0.016 for 8-bit PNG
+    * (the Bonn data's documented scale), 0.001 (millimetres) for 16-bit PNG and .u16. */
+  double depth_scale = 0.0;
+  /** Image size of a raw .u16 file (it has no header). */
+  int width = 640;
+  int height = 480;
+};
+
+/** An input problem: the message names the file and what is wrong with it. */
+class FrameError : public std::runtime_error
+{
+public:
+  using std::runtime_error::runtime_error;
+};
+
+/** A loaded frame. */
+struct Frame
+{
+  std::string path;
+  pcl::PointCloud<pcl::PointXYZ>::Ptr cloud;  ///< organized, metres, NaN = invalid
+  CameraIntrinsics intrinsics;                ///< used to back-project (unset for PCD)
+  double depth_scale = 0.0;                   ///< metres per unit (0 for PCD)
+  bool from_depth_image = false;
+};
+
+/** Default metres-per-unit for a depth image of the given OpenCV depth (CV_8U, CV_16U). */
+double defaultDepthScale (int cv_depth);
+
+/** \brief Back-projects a single-channel CV_8U or CV_16U depth image; 0 is invalid.
+  * \throws FrameError on an unsupported image type */
+void
+depthImageToCloud (const cv::Mat &depth, const CameraIntrinsics &intrinsics,
+                   double depth_scale, pcl::PointCloud<pcl::PointXYZ> &cloud);
+
+/** \brief Loads a frame by extension: .pcd (organized, any point type with x, y, z),
+  * .png (8 or 16-bit single channel depth) or .u16 (raw little-endian uint16).
+  * \throws FrameError naming the file and the problem (missing, truncated,
+  *         wrong size, unorganized, not a depth image, ...) */
+Frame loadFrame (const std::string &path, const FrameOptions &options = FrameOptions ());
+
+/** A crop of an organized frame followed by an isotropic resampling, e.g. the
+  * 144x176 portrait view of a 640x480 frame. */
+struct FrameView
+{
+  int x = 0, y = 0, width = 0, height = 0;  ///< crop in source pixels
+  double scale = 1.0;                        ///< output pixels per source pixel
+  int outputWidth () const;
+  int outputHeight () const;
+  /** Source pixel sampled for output pixel (u, v) (nearest, pixel centres). */
+  cv::Point sourcePixel (int u, int v) const;
+  /** Continuous source pixel coordinate to output coordinate. */
+  cv::Point2f toView (const cv::Point2f &source) const;
+};
+
+/** The view the Bonn source worked on: crop x=140, y=20, 360x440, scaled by 0.4 (144x176). */
+FrameView bonnPortraitView ();
+
+/** \brief Resamples an organized cloud to a view. Each output point is a copy of
+  * the nearest source point, never a blend, so no mixed depths are invented.
+  * \throws FrameError if the crop does not fit inside the cloud */
+void applyView (const pcl::PointCloud<pcl::PointXYZ> &input, const FrameView &view,
+                pcl::PointCloud<pcl::PointXYZ> &output);
+}  // namespace agex

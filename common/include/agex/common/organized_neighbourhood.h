@@ -1,0 +1,68 @@
+#pragma once
+// The 8-neighbourhood of an organized cloud and the "connected" relation that
+// both the surface segmenter and the AGEX geodesic graph are built on, kept in
+// one place so that a mesh found by one is exactly a connected graph for the other.
+
+#include <pcl/point_cloud.h>
+#include <cmath>
+
+namespace agex
+{
+/** Pixel offsets (du, dv) of the four "forward" 8-neighbours. Visiting them from
+  * every pixel visits every undirected 8-neighbour edge exactly once. */
+constexpr int kForwardNeighbours[4][2] = {{1, 0}, {-1, 1}, {0, 1}, {1, 1}};
+
+/** All eight neighbour offsets (du, dv). */
+constexpr int kAllNeighbours[8][2] = {{1, 0}, {-1, 1}, {0, 1}, {1, 1},
+                                      {-1, 0}, {1, -1}, {0, -1}, {-1, -1}};
+
+template <typename PointT> inline bool
+isFinitePoint (const PointT &p)
+{
+  return std::isfinite (p.x) && std::isfinite (p.y) && std::isfinite (p.z);
+}
+
+/** Squared 3D distance between two points. */
+template <typename PointT> inline float
+squaredDistance3D (const PointT &a, const PointT &b)
+{
+  const float dx = a.x - b.x, dy = a.y - b.y, dz = a.z - b.z;
+  return dx * dx + dy * dy + dz * dz;
+}
+
+/** \brief Calls edge(i, j, length) for every 8-neighbour pair (i, j) of an organized
+  * cloud where both points are finite and selected by mask (nullptr: all) and
+  * their 3D distance is below max_edge_length.
+  * \param[in] mask per-point flags (size = cloud.size()) or nullptr
+  */
+template <typename PointT, typename EdgeFn> void
+forEachOrganizedEdge (const pcl::PointCloud<PointT> &cloud, const unsigned char *mask,
+                      float max_edge_length, EdgeFn &&edge)
+{
+  const int width = static_cast<int> (cloud.width);
+  const int height = static_cast<int> (cloud.height);
+  const float max_sq = max_edge_length * max_edge_length;
+  auto selected = [&] (int idx) {
+    return (!mask || mask[idx] != 0) && isFinitePoint (cloud[idx]);
+  };
+  for (int v = 0; v < height; ++v)
+    for (int u = 0; u < width; ++u)
+    {
+      const int i = v * width + u;
+      if (!selected (i))
+        continue;
+      for (const auto &d : kForwardNeighbours)
+      {
+        const int nu = u + d[0], nv = v + d[1];
+        if (nu < 0 || nu >= width || nv >= height)
+          continue;
+        const int j = nv * width + nu;
+        if (!selected (j))
+          continue;
+        const float sq = squaredDistance3D (cloud[i], cloud[j]);
+        if (sq < max_sq)
+          edge (i, j, std::sqrt (sq));
+      }
+    }
+}
+}  // namespace agex

@@ -1,0 +1,70 @@
+#include <agex/common/atomic_file.h>
+
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <stdexcept>
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+namespace fs = std::filesystem;
+
+namespace agex
+{
+void
+writeFileAtomic (const std::string &path, const std::string &bytes)
+{
+  const fs::path target (path);
+  const fs::path dir = target.has_parent_path () ? target.parent_path () : fs::path (".");
+  std::string tmpl = (dir / ("." + target.filename ().string () + ".tmp-XXXXXX")).string ();
+  const int fd = ::mkstemp (tmpl.data ());
+  if (fd < 0)
+    throw std::runtime_error (path + ": cannot create a temporary file in '" + dir.string () +
+                              "': " + std::strerror (errno));
+  std::size_t written = 0;
+  while (written < bytes.size ())
+  {
+    const ssize_t n = ::write (fd, bytes.data () + written, bytes.size () - written);
+    if (n < 0)
+    {
+      if (errno == EINTR)
+        continue;
+      const int err = errno;
+      ::close (fd);
+      ::unlink (tmpl.c_str ());
+      throw std::runtime_error (path + ": write failed: " + std::strerror (err));
+    }
+    written += static_cast<std::size_t> (n);
+  }
+  // mkstemp creates 0600; outputs should be readable like any other file.
+  ::fchmod (fd, 0644);
+  if (::fsync (fd) != 0 || ::close (fd) != 0)
+  {
+    const int err = errno;
+    ::unlink (tmpl.c_str ());
+    throw std::runtime_error (path + ": cannot flush: " + std::strerror (err));
+  }
+  if (std::rename (tmpl.c_str (), path.c_str ()) != 0)
+  {
+    const int err = errno;
+    ::unlink (tmpl.c_str ());
+    throw std::runtime_error (path + ": cannot move the finished file into place: " + std::strerror (err));
+  }
+}
+
+void
+checkOutputIsNotInput (const std::string &output, const std::vector<std::string> &inputs)
+{
+  std::error_code ec;
+  const fs::path out = fs::weakly_canonical (output, ec);
+  for (const auto &in : inputs)
+  {
+    const fs::path p = fs::weakly_canonical (in, ec);
+    if (!ec && p == out)
+      throw std::runtime_error (output + ": output would overwrite an input file; choose another path");
+  }
+}
+}  // namespace agex

@@ -1,0 +1,247 @@
+#include <agex/common/frame_io.h>
+
+#include <pcl/PCLPointCloud2.h>
+#include <pcl/conversions.h>
+#include <pcl/io/pcd_io.h>
+
+#include <opencv2/imgcodecs.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+
+namespace fs = std::filesystem;
+
+namespace agex
+{
+namespace
+{
+std::string
+lowerExtension (const std::string &path)
+{
+  std::string ext = fs::path (path).extension ().string ();
+  std::transform (ext.begin (), ext.end (), ext.begin (), [] (unsigned char c) { return std::tolower (c); });
+  return ext;
+}
+
+[[noreturn]] void
+fail (const std::string &path, const std::string &problem)
+{
+  throw FrameError (path + ": " + problem);
+}
+
+Frame
+loadPCD (const std::string &path)
+{
+  pcl::PCDReader reader;
+  pcl::PCLPointCloud2 header;
+  Eigen::Vector4f origin;
+  Eigen::Quaternionf orientation;
+  int version = 0, type = 0;
+  unsigned int offset = 0;
+  if (reader.readHeader (path, header, origin, orientation, version, type, offset) < 0)
+    fail (path, "not a readable PCD file (bad or missing header)");
+  for (const char *name : {"x", "y", "z"})
+    if (std::none_of (header.fields.begin (), header.fields.end (),
+                      [&] (const pcl::PCLPointField &f) { return f.name == name; }))
+      fail (path, std::string ("PCD has no '") + name + "' field; agex needs x, y, z");
+  if (header.height <= 1)
+    fail (path, "PCD cloud is not organized (height " + std::to_string (header.height) +
+                    "); agex stages need an organized depth frame");
+
+  pcl::PCLPointCloud2 blob;
+  if (reader.read (path, blob) < 0)
+    fail (path, "PCD data could not be read (truncated or corrupted)");
+  if (static_cast<std::size_t> (blob.width) * blob.height * blob.point_step != blob.data.size ())
+    fail (path, "PCD data size does not match its header (truncated or corrupted)");
+
+  Frame frame;
+  frame.path = path;
+  frame.cloud.reset (new pcl::PointCloud<pcl::PointXYZ>);
+  pcl::fromPCLPointCloud2 (blob, *frame.cloud);
+  // PCL marks some invalid points as (0,0,0); agex uses NaN for invalid everywhere.
+  for (auto &p : frame.cloud->points)
+    if (!std::isfinite (p.x) || !std::isfinite (p.y) || !std::isfinite (p.z) || p.z <= 0.f)
+      p.x = p.y = p.z = std::numeric_limits<float>::quiet_NaN ();
+  frame.cloud->is_dense = false;
+  return frame;
+}
+
+cv::Mat
+readRawU16 (const std::string &path, int width, int height)
+{
+  if (width <= 0 || height <= 0)
+    fail (path, "a .u16 frame needs a positive --width and --height");
+  std::ifstream in (path, std::ios::binary | std::ios::ate);
+  if (!in)
+    fail (path, "cannot open file");
+  const std::streamoff size = in.tellg ();
+  const std::streamoff expected = static_cast<std::streamoff> (width) * height * 2;
+  if (size != expected)
+    fail (path, "has " + std::to_string (size) + " bytes, expected " + std::to_string (expected) +
+                    " for a " + std::to_string (width) + "x" + std::to_string (height) +
+                    " uint16 frame (check --width/--height)");
+  cv::Mat depth (height, width, CV_16UC1);
+  in.seekg (0);
+  // Raw frames are little-endian, as is every platform agex targets.
+  static_assert (sizeof (std::uint16_t) == 2, "uint16 must be 2 bytes");
+  if (!in.read (reinterpret_cast<char *> (depth.data), expected))
+    fail (path, "read error");
+  return depth;
+}
+}  // namespace
+
+double
+defaultDepthScale (int cv_depth)
+{
+  return cv_depth == CV_8U ? 0.016 : 0.001;
+}
+
+void
+depthImageToCloud (const cv::Mat &depth, const CameraIntrinsics &intrinsics, double depth_scale,
+                   pcl::PointCloud<pcl::PointXYZ> &cloud)
+{
+  if (depth.empty () || depth.channels () != 1 || (depth.depth () != CV_8U && depth.depth () != CV_16U))
+    throw FrameError ("depth image must be a non-empty single-channel 8 or 16-bit image");
+  if (!(depth_scale > 0.0) || !std::isfinite (depth_scale))
+    throw FrameError ("depth scale must be a positive number of metres per unit");
+  if (!(intrinsics.fx > 0.0) || !(intrinsics.fy > 0.0))
+    throw FrameError ("focal lengths fx, fy must be positive");
+
+  cloud.width = static_cast<std::uint32_t> (depth.cols);
+  cloud.height = static_cast<std::uint32_t> (depth.rows);
+  cloud.is_dense = false;
+  cloud.resize (cloud.width * cloud.height);
+  const float nan = std::numeric_limits<float>::quiet_NaN ();
+  const double inv_fx = 1.0 / intrinsics.fx, inv_fy = 1.0 / intrinsics.fy;
+  for (int v = 0; v < depth.rows; ++v)
+    for (int u = 0; u < depth.cols; ++u)
+    {
+      const unsigned raw = depth.depth () == CV_8U ? depth.at<std::uint8_t> (v, u) : depth.at<std::uint16_t> (v, u);
+      pcl::PointXYZ &p = cloud (u, v);
+      if (raw == 0)
+      {
+        p.x = p.y = p.z = nan;
+        continue;
+      }
+      const double z = raw * depth_scale;
+      p.x = static_cast<float> ((u - intrinsics.cx) * z * inv_fx);
+      p.y = static_cast<float> ((v - intrinsics.cy) * z * inv_fy);
+      p.z = static_cast<float> (z);
+    }
+}
+
+Frame
+loadFrame (const std::string &path, const FrameOptions &options)
+{
+  std::error_code ec;
+  if (!fs::exists (path, ec))
+    fail (path, "no such file");
+  if (fs::is_directory (path, ec))
+    fail (path, "is a directory, expected a frame file");
+
+  const std::string ext = lowerExtension (path);
+  if (ext == ".pcd")
+    return loadPCD (path);
+
+  cv::Mat depth;
+  if (ext == ".png")
+  {
+    depth = cv::imread (path, cv::IMREAD_UNCHANGED);
+    if (depth.empty ())
+      fail (path, "cannot decode PNG (truncated or not a PNG)");
+    if (depth.channels () != 1)
+      fail (path, "is a " + std::to_string (depth.channels ()) +
+                      "-channel image; a depth frame must be single-channel");
+    if (depth.depth () != CV_8U && depth.depth () != CV_16U)
+      fail (path, "depth PNG must be 8 or 16-bit");
+  }
+  else if (ext == ".u16")
+    depth = readRawU16 (path, options.width, options.height);
+  else
+    fail (path, "unknown frame format '" + ext + "' (expected .pcd, .png or .u16)");
+
+  Frame frame;
+  frame.path = path;
+  frame.from_depth_image = true;
+  frame.intrinsics = options.intrinsics;
+  frame.depth_scale = options.depth_scale > 0.0 ? options.depth_scale : defaultDepthScale (depth.depth ());
+  frame.cloud.reset (new pcl::PointCloud<pcl::PointXYZ>);
+  try
+  {
+    depthImageToCloud (depth, frame.intrinsics, frame.depth_scale, *frame.cloud);
+  }
+  catch (const FrameError &e)
+  {
+    fail (path, e.what ());
+  }
+  return frame;
+}
+
+int
+FrameView::outputWidth () const
+{
+  return static_cast<int> (std::floor (width * scale + 1e-9));
+}
+
+int
+FrameView::outputHeight () const
+{
+  return static_cast<int> (std::floor (height * scale + 1e-9));
+}
+
+cv::Point
+FrameView::sourcePixel (int u, int v) const
+{
+  const int su = x + std::min (width - 1, static_cast<int> (std::floor ((u + 0.5) / scale)));
+  const int sv = y + std::min (height - 1, static_cast<int> (std::floor ((v + 0.5) / scale)));
+  return {su, sv};
+}
+
+cv::Point2f
+FrameView::toView (const cv::Point2f &source) const
+{
+  return {static_cast<float> ((source.x - x + 0.5) * scale - 0.5),
+          static_cast<float> ((source.y - y + 0.5) * scale - 0.5)};
+}
+
+FrameView
+bonnPortraitView ()
+{
+  FrameView view;
+  view.x = 140;
+  view.y = 20;
+  view.width = 360;
+  view.height = 440;
+  view.scale = 0.4;
+  return view;
+}
+
+void
+applyView (const pcl::PointCloud<pcl::PointXYZ> &input, const FrameView &view,
+           pcl::PointCloud<pcl::PointXYZ> &output)
+{
+  if (!input.isOrganized ())
+    throw FrameError ("a view needs an organized cloud");
+  if (view.x < 0 || view.y < 0 || view.width <= 0 || view.height <= 0 || !(view.scale > 0.0) ||
+      view.x + view.width > static_cast<int> (input.width) ||
+      view.y + view.height > static_cast<int> (input.height) || view.outputWidth () < 1 ||
+      view.outputHeight () < 1)
+    throw FrameError ("view crop " + std::to_string (view.width) + "x" + std::to_string (view.height) + "+" +
+                      std::to_string (view.x) + "+" + std::to_string (view.y) + " does not fit a " +
+                      std::to_string (input.width) + "x" + std::to_string (input.height) + " frame");
+  const int ow = view.outputWidth (), oh = view.outputHeight ();
+  pcl::PointCloud<pcl::PointXYZ> result (ow, oh);
+  for (int v = 0; v < oh; ++v)
+    for (int u = 0; u < ow; ++u)
+    {
+      const cv::Point s = view.sourcePixel (u, v);
+      result (u, v) = input (s.x, s.y);
+    }
+  result.is_dense = false;
+  result.header = input.header;
+  output = std::move (result);
+}
+}  // namespace agex

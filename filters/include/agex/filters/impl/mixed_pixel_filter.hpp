@@ -1,0 +1,83 @@
+#pragma once
+
+#include <agex/common/organized_neighbourhood.h>
+#include <agex/filters/mixed_pixel_filter.h>
+
+#include <cmath>
+
+template <typename PointT> bool
+agex::MixedPixelFilter<PointT>::isMixedPixel (int index) const
+{
+  const PointCloud &cloud = *input_;
+  const PointT &p = cloud[index];
+  if (!isFinitePoint (p))
+    return false;
+  const int width = static_cast<int> (cloud.width), height = static_cast<int> (cloud.height);
+  const int u = index % width, v = index / width;
+  const float range_p = p.getVector3fMap ().norm ();
+  if (!(range_p > 0.f))
+    return false;
+  const Eigen::Vector3f ray = p.getVector3fMap () / range_p;
+
+  for (const auto &d : kForwardNeighbours)
+    for (int r = 1; r <= window_radius_; ++r)
+    {
+      const int u1 = u - r * d[0], v1 = v - r * d[1];
+      const int u2 = u + r * d[0], v2 = v + r * d[1];
+      if (u1 < 0 || u1 >= width || v1 < 0 || v1 >= height || u2 < 0 || u2 >= width || v2 < 0 || v2 >= height)
+        continue;
+      const PointT &q1 = cloud[v1 * width + u1];
+      const PointT &q2 = cloud[v2 * width + u2];
+      if (!isFinitePoint (q1) || !isFinitePoint (q2))
+        continue;
+      const float r1 = q1.getVector3fMap ().norm (), r2 = q2.getVector3fMap ().norm ();
+      const float jump = std::abs (r2 - r1);
+      if (jump < min_jump_)
+        continue;
+      const float lo = std::min (r1, r2), hi = std::max (r1, r2);
+      const float margin = interior_margin_ * jump;
+      if (range_p <= lo + margin || range_p >= hi - margin)
+        continue;
+      const Eigen::Vector3f across = q2.getVector3fMap () - q1.getVector3fMap ();
+      const float len = across.norm ();
+      if (len > 0.f && std::abs (across.dot (ray)) >= cos_max_veil_angle_ * len)
+        return true;
+    }
+  return false;
+}
+
+template <typename PointT> void
+agex::MixedPixelFilter<PointT>::applyFilter (pcl::Indices &indices)
+{
+  indices.clear ();
+  removed_indices_->clear ();
+  if (!input_->isOrganized ())
+  {
+    PCL_ERROR ("[agex::%s::applyFilter] The input cloud is not organized (height %u); "
+               "mixed pixels can only be found in an organized depth frame.\n",
+               getClassName ().c_str (), input_->height);
+    return;
+  }
+  if (window_radius_ < 1 || !(min_jump_ > 0.f) || !(max_veil_angle_deg_ > 0.f && max_veil_angle_deg_ < 90.f) ||
+      !(interior_margin_ >= 0.f && interior_margin_ < 0.5f))
+  {
+    PCL_ERROR ("[agex::%s::applyFilter] Invalid parameters: window radius %d (>= 1), min jump %g (> 0), "
+               "max veil angle %g (0-90 degrees), interior margin %g (0-0.5).\n",
+               getClassName ().c_str (), window_radius_, min_jump_, max_veil_angle_deg_, interior_margin_);
+    return;
+  }
+  cos_max_veil_angle_ = std::cos (max_veil_angle_deg_ * static_cast<float> (M_PI) / 180.f);
+
+  indices.reserve (indices_->size ());
+  for (const auto index : *indices_)
+  {
+    const bool finite = isFinitePoint ((*input_)[index]);
+    const bool keep = finite && (isMixedPixel (index) == negative_);
+    if (keep)
+      indices.push_back (index);
+    else if (extract_removed_indices_)
+      removed_indices_->push_back (index);
+  }
+}
+
+#define PCL_INSTANTIATE_MixedPixelFilter(T) template class PCL_EXPORTS agex::MixedPixelFilter<T>;

@@ -1,0 +1,247 @@
+#pragma once
+
+#include <agex/common/organized_neighbourhood.h>
+#include <agex/filters/impl/surface_segmentation.hpp>
+#include <agex/keypoints/agex_keypoint.h>
+
+#include <pcl/common/copy_point.h>
+
+#include <algorithm>
+#include <functional>
+#include <limits>
+
+template <typename PointInT, typename PointOutT> bool
+agex::AGEXKeypoint<PointInT, PointOutT>::initCompute ()
+{
+  if (!pcl::PCLBase<PointInT>::initCompute ())
+  {
+    PCL_ERROR ("[agex::%s::initCompute] No input cloud was given.\n", getClassName ().c_str ());
+    return false;
+  }
+  if (!input_->isOrganized ())
+  {
+    PCL_ERROR ("[agex::%s::initCompute] The input cloud is not organized (height %u); "
+               "AGEX needs the pixel grid of a depth frame.\n", getClassName ().c_str (), input_->height);
+    return false;
+  }
+  if (k_per_mesh_ < 1 || !(delta_connected_ > 0.f) || !(delta_orient_ >= 0.f))
+  {
+    PCL_ERROR ("[agex::%s::initCompute] Invalid parameters: k %d (>= 1), delta_connected %g (> 0), "
+               "delta_orient %g (>= 0).\n", getClassName ().c_str (), k_per_mesh_, delta_connected_, delta_orient_);
+    return false;
+  }
+  if (user_meshes_)
+    for (const auto &mesh : meshes_)
+      for (const auto i : mesh.indices)
+        if (i < 0 || static_cast<std::size_t> (i) >= input_->size ())
+        {
+          PCL_ERROR ("[agex::%s::initCompute] A mesh holds index %d, outside the %zu-point cloud.\n",
+                     getClassName ().c_str (), i, input_->size ());
+          return false;
+        }
+  return true;
+}
+
+template <typename PointInT, typename PointOutT> void
+agex::AGEXKeypoint<PointInT, PointOutT>::buildGraph (const pcl::Indices &mesh, MeshGraph &graph)
+{
+  const PointCloudIn &cloud = *input_;
+  const int width = static_cast<int> (cloud.width), height = static_cast<int> (cloud.height);
+  graph.points.clear ();
+  for (const auto i : mesh)
+    if (isFinitePoint (cloud[i]) && point_to_vertex_[i] < 0)
+    {
+      point_to_vertex_[i] = 0;  // mark; numbered below in index order
+      graph.points.push_back (i);
+    }
+  // Vertex ids follow point indices, which makes every tie-break index-based.
+  std::sort (graph.points.begin (), graph.points.end ());
+  const int n = static_cast<int> (graph.points.size ());
+  for (int vtx = 0; vtx < n; ++vtx)
+    point_to_vertex_[graph.points[vtx]] = vtx;
+
+  graph.degree.assign (n, 0);
+  graph.neighbours.resize (static_cast<std::size_t> (n) * 8);
+  graph.weights.resize (static_cast<std::size_t> (n) * 8);
+  const float max_sq = delta_connected_ * delta_connected_;
+  for (int vtx = 0; vtx < n; ++vtx)
+  {
+    const int i = graph.points[vtx];
+    const int u = i % width, v = i / width;
+    for (const auto &d : kAllNeighbours)
+    {
+      const int nu = u + d[0], nv = v + d[1];
+      if (nu < 0 || nu >= width || nv < 0 || nv >= height)
+        continue;
+      const int j = nv * width + nu;
+      const int other = point_to_vertex_[j];
+      if (other < 0)
+        continue;
+      const float sq = squaredDistance3D (cloud[i], cloud[j]);
+      if (!(sq < max_sq))
+        continue;
+      const std::size_t slot = static_cast<std::size_t> (vtx) * 8 + graph.degree[vtx]++;
+      graph.neighbours[slot] = other;
+      graph.weights[slot] = std::sqrt (sq);
+    }
+  }
+}
+
+// Dijkstra from whatever is on the heap, relaxing only vertices whose distance
+// drops. Parents are chosen deterministically: the lowest-index neighbour among
+// those that are strictly closer and give exactly the final distance. That makes
+// the shortest-path tree a function of the distances alone, so the incremental
+// and naive modes agree on orientations too.
+template <typename PointInT, typename PointOutT> void
+agex::AGEXKeypoint<PointInT, PointOutT>::relax (const MeshGraph &graph)
+{
+  const auto later = std::greater<std::pair<double, int>> ();
+  while (!heap_.empty ())
+  {
+    std::pop_heap (heap_.begin (), heap_.end (), later);
+    const auto [d, u] = heap_.back ();
+    heap_.pop_back ();
+    if (d > distance_[u])
+      continue;  // stale entry
+    const std::size_t base = static_cast<std::size_t> (u) * 8;
+    for (int e = 0; e < graph.degree[u]; ++e)
+    {
+      const int v = graph.neighbours[base + e];
+      const double nd = d + graph.weights[base + e];
+      if (nd < distance_[v])
+      {
+        distance_[v] = nd;
+        parent_[v] = u;
+        heap_.emplace_back (nd, v);
+        std::push_heap (heap_.begin (), heap_.end (), later);
+      }
+      else if (nd == distance_[v] && d < distance_[v] && u < parent_[v])
+        parent_[v] = u;
+    }
+  }
+}
+
+template <typename PointInT, typename PointOutT> void
+agex::AGEXKeypoint<PointInT, PointOutT>::runMesh (const MeshGraph &graph, int mesh_id, PointCloudOut &output)
+{
+  const PointCloudIn &cloud = *input_;
+  const int n = static_cast<int> (graph.points.size ());
+  const double inf = std::numeric_limits<double>::infinity ();
+
+  // AGEX_1: the vertex nearest to the 3D centroid (ties: lowest index).
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero ();
+  for (const int i : graph.points)
+    centroid += cloud[i].getVector3fMap ().template cast<double> ();
+  centroid /= n;
+  int first = 0;
+  double best = inf;
+  for (int vtx = 0; vtx < n; ++vtx)
+  {
+    const double sq = (cloud[graph.points[vtx]].getVector3fMap ().template cast<double> () - centroid).squaredNorm ();
+    if (sq < best)
+    {
+      best = sq;
+      first = vtx;
+    }
+  }
+
+  distance_.assign (n, inf);
+  parent_.assign (n, -1);
+  std::vector<int> sources;
+  auto add_point = [&] (int vtx, double geodesic, const Eigen::Vector3f &orientation) {
+    const int index = graph.points[vtx];
+    agex::InterestPoint ip;
+    ip.getVector3fMap () = cloud[index].getVector3fMap ();
+    ip.getOrientationVector3fMap () = orientation;
+    ip.geodesic_distance = static_cast<float> (geodesic);
+    ip.rank = static_cast<std::int32_t> (sources.size () + 1);
+    ip.mesh = mesh_id;
+    ip.u = static_cast<std::int32_t> (index % cloud.width);
+    ip.v = static_cast<std::int32_t> (index / cloud.width);
+    PointOutT out;
+    pcl::copyPoint (ip, out);
+    output.push_back (out);
+    keypoints_indices_->indices.push_back (index);
+    sources.push_back (vtx);
+
+    heap_.clear ();
+    if (mode_ == Mode::Naive)
+    {
+      // Reference: forget everything and run a full multi-source Dijkstra.
+      distance_.assign (n, inf);
+      parent_.assign (n, -1);
+      for (const int s : sources)
+      {
+        distance_[s] = 0.0;
+        heap_.emplace_back (0.0, s);
+      }
+      std::make_heap (heap_.begin (), heap_.end (), std::greater<std::pair<double, int>> ());
+    }
+    else
+    {
+      // The zero-cost edge to the new source: only what gets closer is touched.
+      distance_[vtx] = 0.0;
+      parent_[vtx] = -1;
+      heap_.emplace_back (0.0, vtx);
+    }
+    relax (graph);
+  };
+
+  add_point (first, 0.0, Eigen::Vector3f::Zero ());
+  for (int rank = 2; rank <= k_per_mesh_; ++rank)
+  {
+    int farthest = -1;
+    double far_distance = 0.0;
+    for (int vtx = 0; vtx < n; ++vtx)
+      if (distance_[vtx] > far_distance && distance_[vtx] < inf)
+      {
+        far_distance = distance_[vtx];
+        farthest = vtx;
+      }
+    if (farthest < 0)
+      break;  // every reachable vertex is already a point: k exceeds the mesh
+
+    int reached = farthest;
+    while (parent_[reached] >= 0 && far_distance - distance_[reached] < delta_orient_)
+      reached = parent_[reached];
+    Eigen::Vector3f orientation =
+        cloud[graph.points[farthest]].getVector3fMap () - cloud[graph.points[reached]].getVector3fMap ();
+    const float length = orientation.norm ();
+    orientation = length > 0.f ? Eigen::Vector3f (orientation / length) : Eigen::Vector3f::Zero ();
+    add_point (farthest, far_distance, orientation);
+  }
+}
+
+template <typename PointInT, typename PointOutT> void
+agex::AGEXKeypoint<PointInT, PointOutT>::detectKeypoints (PointCloudOut &output)
+{
+  output.clear ();
+  keypoints_indices_->indices.clear ();
+
+  if (!user_meshes_)
+  {
+    agex::SurfaceSegmentation<PointInT> segmentation;
+    segmentation.setInputCloud (input_);
+    segmentation.setIndices (indices_);
+    segmentation.setDeltaConnected (delta_connected_);
+    segmentation.setMinMeshSize (std::max<std::size_t> (1, min_mesh_size_));
+    segmentation.segment (meshes_);
+  }
+
+  point_to_vertex_.assign (input_->size (), -1);
+  MeshGraph graph;
+  for (std::size_t m = 0; m < meshes_.size (); ++m)
+  {
+    buildGraph (meshes_[m].indices, graph);
+    if (!graph.points.empty () && graph.points.size () >= min_mesh_size_)
+      runMesh (graph, static_cast<int> (m), output);
+    for (const int i : graph.points)
+      point_to_vertex_[i] = -1;
+  }
+  output.width = static_cast<std::uint32_t> (output.size ());
+  output.height = 1;
+  output.is_dense = true;
+  output.header = input_->header;
+}
+
+#define PCL_INSTANTIATE_AGEXKeypoint(IN, OUT) template class PCL_EXPORTS agex::AGEXKeypoint<IN, OUT>;

@@ -2,6 +2,8 @@
 
 #include <pcl/filters/filter_indices.h>
 
+#include <vector>
+
 namespace agex
 {
 /** \brief Removes mixed ("flying") pixels at depth discontinuities of an organized cloud.
@@ -64,18 +66,22 @@ public:
   void setInteriorMargin (float fraction) { interior_margin_ = fraction; }
   float getInteriorMargin () const { return interior_margin_; }
 
-  /** True if the point at index is a mixed pixel by the criterion above. */
-  bool isMixedPixel (int index) const;
+  /** True if the point at index of the input cloud is a mixed pixel by the criterion
+    * above (setInputCloud first). */
+  bool isMixedPixel (int index) const { return isMixed (index, nullptr); }
 
 protected:
   void applyFilter (pcl::Indices &indices) override;
 
 private:
+  /** The test, with the points' ranges precomputed (or nullptr to compute them). */
+  bool isMixed (int index, const float *ranges) const;
+
   int window_radius_ = 2;
   float min_jump_ = 0.05f;
   float max_veil_angle_deg_ = 15.f;
   float interior_margin_ = 0.1f;
-  float cos_max_veil_angle_ = 0.f;  // cached per run
+  std::vector<float> ranges_;  // per run: distance of each point from the sensor
 };
 }  // namespace agex
 

@@ -1,6 +1,7 @@
 #pragma once
 
 #include <agex/common/point_types.h>
+#include <agex/keypoints/bucket_queue.h>
 
 #include <pcl/PointIndices.h>
 #include <pcl/keypoints/keypoint.h>
@@ -21,7 +22,8 @@ namespace agex
   *    lands on the torso);
   *  - AGEX_k adds the vertex with the largest geodesic distance to all points
   *    found so far (ties: the lowest point index).
-  * Distances to the growing set are kept by an incremental multi-source Dijkstra:
+  * Distances to the growing set are kept by an incremental multi-source Dijkstra
+  * (with a bucket queue, since edges are never longer than delta_connected):
   * each new point is joined to the source by a zero-cost edge, and only vertices
   * whose distance drops are relaxed again (Mode::Incremental). Mode::Naive reruns a
   * full multi-source Dijkstra for every k, as a reference; both give identical
@@ -133,9 +135,9 @@ private:
 
   // Per-mesh scratch, kept to avoid reallocating for every frame.
   std::vector<int> point_to_vertex_;
-  std::vector<double> distance_;
+  std::vector<float> distance_;
   std::vector<int> parent_;
-  std::vector<std::pair<double, int>> heap_;
+  BucketQueue queue_;
 };
 }  // namespace agex
 

@@ -6,7 +6,7 @@
 #include <cmath>
 
 template <typename PointT> bool
-agex::MixedPixelFilter<PointT>::isMixedPixel (int index) const
+agex::MixedPixelFilter<PointT>::isMixed (int index, const float *ranges) const
 {
   const PointCloud &cloud = *input_;
   const PointT &p = cloud[index];
@@ -14,7 +14,9 @@ agex::MixedPixelFilter<PointT>::isMixedPixel (int index) const
     return false;
   const int width = static_cast<int> (cloud.width), height = static_cast<int> (cloud.height);
   const int u = index % width, v = index / width;
-  const float range_p = p.getVector3fMap ().norm ();
+  auto range = [&] (int i) { return ranges ? ranges[i] : cloud[i].getVector3fMap ().norm (); };
+  const float cos_max_angle = std::cos (max_veil_angle_deg_ * static_cast<float> (M_PI) / 180.f);
+  const float range_p = range (index);
   if (!(range_p > 0.f))
     return false;
   const Eigen::Vector3f ray = p.getVector3fMap () / range_p;
@@ -26,13 +28,14 @@ agex::MixedPixelFilter<PointT>::isMixedPixel (int index) const
       const int u2 = u + r * d[0], v2 = v + r * d[1];
       if (u1 < 0 || u1 >= width || v1 < 0 || v1 >= height || u2 < 0 || u2 >= width || v2 < 0 || v2 >= height)
         continue;
-      const PointT &q1 = cloud[v1 * width + u1];
-      const PointT &q2 = cloud[v2 * width + u2];
+      const int i1 = v1 * width + u1, i2 = v2 * width + u2;
+      const PointT &q1 = cloud[i1];
+      const PointT &q2 = cloud[i2];
       if (!isFinitePoint (q1) || !isFinitePoint (q2))
         continue;
-      const float r1 = q1.getVector3fMap ().norm (), r2 = q2.getVector3fMap ().norm ();
+      const float r1 = range (i1), r2 = range (i2);
       const float jump = std::abs (r2 - r1);
-      if (jump < min_jump_)
+      if (!(jump >= min_jump_))
         continue;
       const float lo = std::min (r1, r2), hi = std::max (r1, r2);
       const float margin = interior_margin_ * jump;
@@ -40,7 +43,7 @@ agex::MixedPixelFilter<PointT>::isMixedPixel (int index) const
         continue;
       const Eigen::Vector3f across = q2.getVector3fMap () - q1.getVector3fMap ();
       const float len = across.norm ();
-      if (len > 0.f && std::abs (across.dot (ray)) >= cos_max_veil_angle_ * len)
+      if (len > 0.f && std::abs (across.dot (ray)) >= cos_max_angle * len)
         return true;
     }
   return false;
@@ -66,13 +69,16 @@ agex::MixedPixelFilter<PointT>::applyFilter (pcl::Indices &indices)
                getClassName ().c_str (), window_radius_, min_jump_, max_veil_angle_deg_, interior_margin_);
     return;
   }
-  cos_max_veil_angle_ = std::cos (max_veil_angle_deg_ * static_cast<float> (M_PI) / 180.f);
+  // Each point's range is needed by up to 16 tests of its neighbours: compute it once.
+  ranges_.resize (input_->size ());
+  for (std::size_t i = 0; i < input_->size (); ++i)
+    ranges_[i] = (*input_)[i].getVector3fMap ().norm ();
 
   indices.reserve (indices_->size ());
   for (const auto index : *indices_)
   {
     const bool finite = isFinitePoint ((*input_)[index]);
-    const bool keep = finite && (isMixedPixel (index) == negative_);
+    const bool keep = finite && (isMixed (index, ranges_.data ()) == negative_);
     if (keep)
       indices.push_back (index);
     else if (extract_removed_indices_)

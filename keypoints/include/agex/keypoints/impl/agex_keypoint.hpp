@@ -7,7 +7,6 @@
 #include <pcl/common/copy_point.h>
 
 #include <algorithm>
-#include <functional>
 #include <limits>
 
 template <typename PointInT, typename PointOutT> bool
@@ -55,7 +54,8 @@ agex::AGEXKeypoint<PointInT, PointOutT>::buildGraph (const pcl::Indices &mesh, M
       graph.points.push_back (i);
     }
   // Vertex ids follow point indices, which makes every tie-break index-based.
-  std::sort (graph.points.begin (), graph.points.end ());
+  if (!std::is_sorted (graph.points.begin (), graph.points.end ()))
+    std::sort (graph.points.begin (), graph.points.end ());
   const int n = static_cast<int> (graph.points.size ());
   for (int vtx = 0; vtx < n; ++vtx)
     point_to_vertex_[graph.points[vtx]] = vtx;
@@ -64,14 +64,15 @@ agex::AGEXKeypoint<PointInT, PointOutT>::buildGraph (const pcl::Indices &mesh, M
   graph.neighbours.resize (static_cast<std::size_t> (n) * 8);
   graph.weights.resize (static_cast<std::size_t> (n) * 8);
   const float max_sq = delta_connected_ * delta_connected_;
+  // Each undirected edge is measured once, from its first pixel in scan order.
   for (int vtx = 0; vtx < n; ++vtx)
   {
     const int i = graph.points[vtx];
     const int u = i % width, v = i / width;
-    for (const auto &d : kAllNeighbours)
+    for (const auto &d : kForwardNeighbours)
     {
       const int nu = u + d[0], nv = v + d[1];
-      if (nu < 0 || nu >= width || nv < 0 || nv >= height)
+      if (nu < 0 || nu >= width || nv >= height)
         continue;
       const int j = nv * width + nu;
       const int other = point_to_vertex_[j];
@@ -80,14 +81,18 @@ agex::AGEXKeypoint<PointInT, PointOutT>::buildGraph (const pcl::Indices &mesh, M
       const float sq = squaredDistance3D (cloud[i], cloud[j]);
       if (!(sq < max_sq))
         continue;
-      const std::size_t slot = static_cast<std::size_t> (vtx) * 8 + graph.degree[vtx]++;
-      graph.neighbours[slot] = other;
-      graph.weights[slot] = std::sqrt (sq);
+      const float length = std::sqrt (sq);
+      const std::size_t a = static_cast<std::size_t> (vtx) * 8 + graph.degree[vtx]++;
+      const std::size_t b = static_cast<std::size_t> (other) * 8 + graph.degree[other]++;
+      graph.neighbours[a] = other;
+      graph.weights[a] = length;
+      graph.neighbours[b] = vtx;
+      graph.weights[b] = length;
     }
   }
 }
 
-// Dijkstra from whatever is on the heap, relaxing only vertices whose distance
+// Shortest paths from whatever is queued, relaxing only vertices whose distance
 // drops. Parents are chosen deterministically: the lowest-index neighbour among
 // those that are strictly closer and give exactly the final distance. That makes
 // the shortest-path tree a function of the distances alone, so the incremental
@@ -95,25 +100,21 @@ agex::AGEXKeypoint<PointInT, PointOutT>::buildGraph (const pcl::Indices &mesh, M
 template <typename PointInT, typename PointOutT> void
 agex::AGEXKeypoint<PointInT, PointOutT>::relax (const MeshGraph &graph)
 {
-  const auto later = std::greater<std::pair<double, int>> ();
-  while (!heap_.empty ())
+  while (!queue_.empty ())
   {
-    std::pop_heap (heap_.begin (), heap_.end (), later);
-    const auto [d, u] = heap_.back ();
-    heap_.pop_back ();
+    const auto [d, u] = queue_.pop ();
     if (d > distance_[u])
       continue;  // stale entry
     const std::size_t base = static_cast<std::size_t> (u) * 8;
     for (int e = 0; e < graph.degree[u]; ++e)
     {
       const int v = graph.neighbours[base + e];
-      const double nd = d + graph.weights[base + e];
+      const float nd = d + graph.weights[base + e];
       if (nd < distance_[v])
       {
         distance_[v] = nd;
         parent_[v] = u;
-        heap_.emplace_back (nd, v);
-        std::push_heap (heap_.begin (), heap_.end (), later);
+        queue_.push (nd, v);
       }
       else if (nd == distance_[v] && d < distance_[v] && u < parent_[v])
         parent_[v] = u;
@@ -126,7 +127,7 @@ agex::AGEXKeypoint<PointInT, PointOutT>::runMesh (const MeshGraph &graph, int me
 {
   const PointCloudIn &cloud = *input_;
   const int n = static_cast<int> (graph.points.size ());
-  const double inf = std::numeric_limits<double>::infinity ();
+  const float inf = std::numeric_limits<float>::infinity ();
 
   // AGEX_1: the vertex nearest to the 3D centroid (ties: lowest index).
   Eigen::Vector3d centroid = Eigen::Vector3d::Zero ();
@@ -134,7 +135,7 @@ agex::AGEXKeypoint<PointInT, PointOutT>::runMesh (const MeshGraph &graph, int me
     centroid += cloud[i].getVector3fMap ().template cast<double> ();
   centroid /= n;
   int first = 0;
-  double best = inf;
+  double best = std::numeric_limits<double>::infinity ();
   for (int vtx = 0; vtx < n; ++vtx)
   {
     const double sq = (cloud[graph.points[vtx]].getVector3fMap ().template cast<double> () - centroid).squaredNorm ();
@@ -148,12 +149,12 @@ agex::AGEXKeypoint<PointInT, PointOutT>::runMesh (const MeshGraph &graph, int me
   distance_.assign (n, inf);
   parent_.assign (n, -1);
   std::vector<int> sources;
-  auto add_point = [&] (int vtx, double geodesic, const Eigen::Vector3f &orientation) {
+  auto add_point = [&] (int vtx, float geodesic, const Eigen::Vector3f &orientation) {
     const int index = graph.points[vtx];
     agex::InterestPoint ip;
     ip.getVector3fMap () = cloud[index].getVector3fMap ();
     ip.getOrientationVector3fMap () = orientation;
-    ip.geodesic_distance = static_cast<float> (geodesic);
+    ip.geodesic_distance = geodesic;
     ip.rank = static_cast<std::int32_t> (sources.size () + 1);
     ip.mesh = mesh_id;
     ip.u = static_cast<std::int32_t> (index % cloud.width);
@@ -164,7 +165,8 @@ agex::AGEXKeypoint<PointInT, PointOutT>::runMesh (const MeshGraph &graph, int me
     keypoints_indices_->indices.push_back (index);
     sources.push_back (vtx);
 
-    heap_.clear ();
+    // Buckets 1/32 of the longest edge wide: nearly Dijkstra's order, few revisits.
+    queue_.reset (delta_connected_ / 32.f, delta_connected_);
     if (mode_ == Mode::Naive)
     {
       // Reference: forget everything and run a full multi-source Dijkstra.
@@ -172,26 +174,25 @@ agex::AGEXKeypoint<PointInT, PointOutT>::runMesh (const MeshGraph &graph, int me
       parent_.assign (n, -1);
       for (const int s : sources)
       {
-        distance_[s] = 0.0;
-        heap_.emplace_back (0.0, s);
+        distance_[s] = 0.f;
+        queue_.push (0.f, s);
       }
-      std::make_heap (heap_.begin (), heap_.end (), std::greater<std::pair<double, int>> ());
     }
     else
     {
       // The zero-cost edge to the new source: only what gets closer is touched.
-      distance_[vtx] = 0.0;
+      distance_[vtx] = 0.f;
       parent_[vtx] = -1;
-      heap_.emplace_back (0.0, vtx);
+      queue_.push (0.f, vtx);
     }
     relax (graph);
   };
 
-  add_point (first, 0.0, Eigen::Vector3f::Zero ());
+  add_point (first, 0.f, Eigen::Vector3f::Zero ());
   for (int rank = 2; rank <= k_per_mesh_; ++rank)
   {
     int farthest = -1;
-    double far_distance = 0.0;
+    float far_distance = 0.f;
     for (int vtx = 0; vtx < n; ++vtx)
       if (distance_[vtx] > far_distance && distance_[vtx] < inf)
       {

@@ -1,0 +1,63 @@
+#pragma once
+
+#include <cmath>
+#include <utility>
+#include <vector>
+
+namespace agex
+{
+/** \brief A circular bucket queue (Dial's algorithm) for shortest paths whose edge
+  * weights are positive and at most max_weight.
+  *
+  * Entries are grouped by floor(distance / width). Every key in the queue lies
+  * within max_weight of the one being processed, so ceil(max_weight / width) + 2
+  * buckets used circularly hold them all. Within a bucket the order is arbitrary:
+  * the search is label-correcting, so a vertex may be settled twice, but it ends at
+  * the same distances as Dijkstra's (the least fixed point of the relaxations).
+  */
+class BucketQueue
+{
+public:
+  using Entry = std::pair<float, int>;  // distance, vertex
+
+  void reset (float width, float max_weight)
+  {
+    width_ = width;
+    const std::size_t count = static_cast<std::size_t> (std::ceil (max_weight / width)) + 2;
+    if (buckets_.size () != count)
+      buckets_.assign (count, {});
+    else
+      for (auto &b : buckets_)
+        b.clear ();
+    current_ = 0;
+    size_ = 0;
+  }
+
+  bool empty () const { return size_ == 0; }
+
+  void push (float distance, int vertex)
+  {
+    const std::size_t bucket = static_cast<std::size_t> (distance / width_);
+    buckets_[bucket % buckets_.size ()].emplace_back (distance, vertex);
+    ++size_;
+  }
+
+  /** Removes and returns an entry of the lowest non-empty bucket. */
+  Entry pop ()
+  {
+    while (buckets_[current_ % buckets_.size ()].empty ())
+      ++current_;
+    auto &bucket = buckets_[current_ % buckets_.size ()];
+    const Entry entry = bucket.back ();
+    bucket.pop_back ();
+    --size_;
+    return entry;
+  }
+
+private:
+  std::vector<std::vector<Entry>> buckets_;
+  float width_ = 1.f;
+  std::size_t current_ = 0;
+  std::size_t size_ = 0;
+};
+}  // namespace agex

@@ -2,6 +2,7 @@
 
 #include <pcl/filters/filter_indices.h>
 
+#include <cmath>
 #include <vector>
 
 namespace agex
@@ -68,7 +69,11 @@ public:
 
   /** True if the point at index of the input cloud is a mixed pixel by the criterion
     * above (setInputCloud first). */
-  bool isMixedPixel (int index) const { return isMixed (index, nullptr); }
+  bool isMixedPixel (int index)
+  {
+    cos_max_veil_angle_ = std::cos (max_veil_angle_deg_ * static_cast<float> (M_PI) / 180.f);
+    return isMixed (index, nullptr);
+  }
 
 protected:
   void applyFilter (pcl::Indices &indices) override;
@@ -82,6 +87,7 @@ private:
   float max_veil_angle_deg_ = 15.f;
   float interior_margin_ = 0.1f;
   std::vector<float> ranges_;  // per run: distance of each point from the sensor
+  float cos_max_veil_angle_ = 0.f;
 };
 }  // namespace agex
 

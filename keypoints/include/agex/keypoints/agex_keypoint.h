@@ -116,9 +116,13 @@ private:
   struct MeshGraph
   {
     std::vector<int> points;
+    struct Edge
+    {
+      int target;
+      float length;
+    };
     std::vector<int> degree;
-    std::vector<int> neighbours;  // 8 slots per vertex
-    std::vector<float> weights;   // 8 slots per vertex
+    std::vector<Edge> edges;  // 8 slots per vertex: one 64-byte cache line
   };
 
   void buildGraph (const pcl::Indices &mesh, MeshGraph &graph);

@@ -15,7 +15,6 @@ agex::MixedPixelFilter<PointT>::isMixed (int index, const float *ranges) const
   const int width = static_cast<int> (cloud.width), height = static_cast<int> (cloud.height);
   const int u = index % width, v = index / width;
   auto range = [&] (int i) { return ranges ? ranges[i] : cloud[i].getVector3fMap ().norm (); };
-  const float cos_max_angle = std::cos (max_veil_angle_deg_ * static_cast<float> (M_PI) / 180.f);
   const float range_p = range (index);
   if (!(range_p > 0.f))
     return false;
@@ -43,7 +42,7 @@ agex::MixedPixelFilter<PointT>::isMixed (int index, const float *ranges) const
         continue;
       const Eigen::Vector3f across = q2.getVector3fMap () - q1.getVector3fMap ();
       const float len = across.norm ();
-      if (len > 0.f && std::abs (across.dot (ray)) >= cos_max_angle * len)
+      if (len > 0.f && std::abs (across.dot (ray)) >= cos_max_veil_angle_ * len)
         return true;
     }
   return false;
@@ -69,6 +68,7 @@ agex::MixedPixelFilter<PointT>::applyFilter (pcl::Indices &indices)
                getClassName ().c_str (), window_radius_, min_jump_, max_veil_angle_deg_, interior_margin_);
     return;
   }
+  cos_max_veil_angle_ = std::cos (max_veil_angle_deg_ * static_cast<float> (M_PI) / 180.f);
   // Each point's range is needed by up to 16 tests of its neighbours: compute it once.
   ranges_.resize (input_->size ());
   for (std::size_t i = 0; i < input_->size (); ++i)

@@ -61,8 +61,7 @@ agex::AGEXKeypoint<PointInT, PointOutT>::buildGraph (const pcl::Indices &mesh, M
     point_to_vertex_[graph.points[vtx]] = vtx;
 
   graph.degree.assign (n, 0);
-  graph.neighbours.resize (static_cast<std::size_t> (n) * 8);
-  graph.weights.resize (static_cast<std::size_t> (n) * 8);
+  graph.edges.resize (static_cast<std::size_t> (n) * 8);
   const float max_sq = delta_connected_ * delta_connected_;
   // Each undirected edge is measured once, from its first pixel in scan order.
   for (int vtx = 0; vtx < n; ++vtx)
@@ -84,10 +83,8 @@ agex::AGEXKeypoint<PointInT, PointOutT>::buildGraph (const pcl::Indices &mesh, M
       const float length = std::sqrt (sq);
       const std::size_t a = static_cast<std::size_t> (vtx) * 8 + graph.degree[vtx]++;
       const std::size_t b = static_cast<std::size_t> (other) * 8 + graph.degree[other]++;
-      graph.neighbours[a] = other;
-      graph.weights[a] = length;
-      graph.neighbours[b] = vtx;
-      graph.weights[b] = length;
+      graph.edges[a] = {other, length};
+      graph.edges[b] = {vtx, length};
     }
   }
 }
@@ -100,24 +97,28 @@ agex::AGEXKeypoint<PointInT, PointOutT>::buildGraph (const pcl::Indices &mesh, M
 template <typename PointInT, typename PointOutT> void
 agex::AGEXKeypoint<PointInT, PointOutT>::relax (const MeshGraph &graph)
 {
+  float *distance = distance_.data ();
+  int *parent = parent_.data ();
+  const auto *edges = graph.edges.data ();
+  const int *degree = graph.degree.data ();
   while (!queue_.empty ())
   {
     const auto [d, u] = queue_.pop ();
-    if (d > distance_[u])
+    if (d > distance[u])
       continue;  // stale entry
-    const std::size_t base = static_cast<std::size_t> (u) * 8;
-    for (int e = 0; e < graph.degree[u]; ++e)
+    const auto *edge = edges + static_cast<std::size_t> (u) * 8;
+    for (int e = 0, end = degree[u]; e < end; ++e)
     {
-      const int v = graph.neighbours[base + e];
-      const float nd = d + graph.weights[base + e];
-      if (nd < distance_[v])
+      const int v = edge[e].target;
+      const float nd = d + edge[e].length;
+      if (nd < distance[v])
       {
-        distance_[v] = nd;
-        parent_[v] = u;
+        distance[v] = nd;
+        parent[v] = u;
         queue_.push (nd, v);
       }
-      else if (nd == distance_[v] && d < distance_[v] && u < parent_[v])
-        parent_[v] = u;
+      else if (nd == distance[v] && d < nd && u < parent[v])
+        parent[v] = u;
     }
   }
 }

@@ -66,6 +66,15 @@ parseVector (const std::string &flag, const std::string &text)
   return v;
 }
 
+/** A float flag whose default prints as written (0.05, not 0.0500000007). */
+po::typed_value<float> *
+floatValue (float *target)
+{
+  std::ostringstream text;
+  text << *target;
+  return po::value (target)->default_value (*target, text.str ());
+}
+
 std::string
 formatVector (const Eigen::Vector3f &v)
 {
@@ -250,32 +259,32 @@ pipelineOptionsDescription (PipelineParams &p, std::vector<std::string> &storage
                                  "within 0.75 m of its optical axis, as in the Bonn frames)");
   desc.add_options ()
     ("k", po::value (&p.k)->default_value (p.k), "AGEX points per mesh, centroid included")
-    ("delta-connected", po::value (&p.delta_connected)->default_value (p.delta_connected),
+    ("delta-connected", floatValue (&p.delta_connected),
      "largest 3D gap between connected neighbour pixels, metres")
-    ("delta-orient", po::value (&p.delta_orient)->default_value (p.delta_orient),
+    ("delta-orient", floatValue (&p.delta_orient),
      "geodesic distance traced back for orientations, metres")
     ("min-mesh-size", po::value (&p.min_mesh_size)->default_value (p.min_mesh_size, "auto"),
      "smallest mesh in points; auto: 0.1% of the frame's pixels")
     ("median-window", po::value (&p.median_window)->default_value (p.median_window),
      "median filter window in pixels (0 or 1: off)")
-    ("median-max-movement", po::value (&p.median_max_movement)->default_value (p.median_max_movement),
+    ("median-max-movement", floatValue (&p.median_max_movement),
      "largest depth change the median may make, metres")
     ("no-mixed-pixel-removal", po::bool_switch ()->notifier ([&p] (bool off) { p.remove_mixed_pixels = !off; }),
      "keep mixed pixels")
     ("mixed-window", po::value (&p.mixed_window_radius)->default_value (p.mixed_window_radius),
      "mixed-pixel neighbour radius, pixels")
-    ("mixed-min-jump", po::value (&p.mixed_min_jump)->default_value (p.mixed_min_jump),
+    ("mixed-min-jump", floatValue (&p.mixed_min_jump),
      "smallest depth jump with mixed pixels, metres")
-    ("mixed-max-angle", po::value (&p.mixed_max_veil_angle_deg)->default_value (p.mixed_max_veil_angle_deg),
+    ("mixed-max-angle", floatValue (&p.mixed_max_veil_angle_deg),
      "largest angle between a jump and the viewing ray, degrees")
     ("crop-min", po::value (&storage[0])->default_value (storage[0]), "bounding box minimum x,y,z, metres")
     ("crop-max", po::value (&storage[1])->default_value (storage[1]), "bounding box maximum x,y,z, metres")
     ("no-floor-removal", po::bool_switch ()->notifier ([&p] (bool off) { p.remove_floor = !off; }),
      "keep the floor")
     ("up", po::value (&storage[2])->default_value (storage[2]), "the world's up direction in camera axes")
-    ("floor-max-tilt", po::value (&p.floor_max_tilt_deg)->default_value (p.floor_max_tilt_deg),
+    ("floor-max-tilt", floatValue (&p.floor_max_tilt_deg),
      "largest angle between the floor normal and up, degrees")
-    ("floor-distance", po::value (&p.floor_distance)->default_value (p.floor_distance),
+    ("floor-distance", floatValue (&p.floor_distance),
      "points closer than this to the floor plane are removed, metres")
     ("naive", po::bool_switch (&p.naive), "reference AGEX: a full Dijkstra per point");
   return desc;

@@ -1,0 +1,519 @@
+// agex::MixedPixelFilter against PCL's filter conventions, and
+// agex::SurfaceSegmentation (8-connected meshes), on synthetic organized clouds.
+
+#include "test_support.h"
+
+#include <agex/filters/mixed_pixel_filter.h>
+#include <agex/filters/surface_segmentation.h>
+
+#include <pcl/console/print.h>
+#include <pcl/filters/passthrough.h>
+#include <pcl/segmentation/euclidean_cluster_comparator.h>
+#include <pcl/segmentation/organized_connected_component_segmentation.h>
+
+#include <algorithm>
+#include <set>
+
+namespace
+{
+using namespace agex_test;
+using Mixed = agex::MixedPixelFilter<pcl::PointXYZ>;
+using Segmentation = agex::SurfaceSegmentation<pcl::PointXYZ>;
+
+class QuietPcl
+{
+public:
+  QuietPcl () : level_ (pcl::console::getVerbosityLevel ()) { pcl::console::setVerbosityLevel (pcl::console::L_ALWAYS); }
+  ~QuietPcl () { pcl::console::setVerbosityLevel (level_); }
+
+private:
+  pcl::console::VERBOSITY_LEVEL level_;
+};
+
+std::vector<int>
+sorted (std::vector<int> v)
+{
+  std::sort (v.begin (), v.end ());
+  return v;
+}
+
+// ---------------------------------------------------------------------------
+// 3. MixedPixelFilter
+
+/** A vertical step edge seen by a 40x20 pinhole camera: a foreground plane at
+  * 1.5 m (columns 0..19), `mixed` columns of pixels whose depth is linearly
+  * interpolated between the two planes (what a ToF/Kinect sensor produces across a
+  * silhouette), then the background plane at 3 m. Two pixels are NaN. */
+struct StepEdge
+{
+  static constexpr int kWidth = 40, kHeight = 20, kFirstMixed = 20;
+  Cloud::Ptr cloud;
+  std::vector<int> mixed, nan, planes;  // index sets, increasing
+
+  explicit StepEdge (int mixed_columns)
+  {
+    Camera cam;
+    cam.width = kWidth;
+    cam.height = kHeight;
+    cam.cx = 19.5;
+    cam.cy = 9.5;
+    cloud = nanCloud (kWidth, kHeight);
+    for (int v = 0; v < kHeight; ++v)
+      for (int u = 0; u < kWidth; ++u)
+      {
+        const int i = v * kWidth + u;
+        double z;
+        if (u < kFirstMixed)
+          z = 1.5;
+        else if (u < kFirstMixed + mixed_columns)
+          z = 1.5 + 1.5 * (u - kFirstMixed + 1) / (mixed_columns + 1);
+        else
+          z = 3.0;
+        if ((u == 5 && v == 3) || (u == 30 && v == 12))
+        {
+          nan.push_back (i);
+          continue;
+        }
+        (*cloud) (u, v) = rayPoint (cam, u, v, z);
+        (u >= kFirstMixed && u < kFirstMixed + mixed_columns ? mixed : planes).push_back (i);
+      }
+  }
+};
+
+TEST (MixedPixelFilter, RemovesExactlyTheInterpolatedPixels)
+{
+  for (int columns : {1, 2})
+  {
+    SCOPED_TRACE (std::to_string (columns) + " mixed column(s)");
+    const StepEdge edge (columns);
+    Mixed filter (true);
+    filter.setInputCloud (edge.cloud);
+    pcl::Indices kept;
+    filter.filter (kept);
+    EXPECT_EQ (sorted (kept), edge.planes) << "both planes are kept, the mixed pixels go";
+    std::vector<int> removed = edge.mixed;
+    removed.insert (removed.end (), edge.nan.begin (), edge.nan.end ());
+    EXPECT_EQ (sorted (*filter.getRemovedIndices ()), sorted (removed));
+    for (const int i : edge.mixed)
+      EXPECT_TRUE (filter.isMixedPixel (i)) << i;
+    for (const int i : edge.planes)
+      EXPECT_FALSE (filter.isMixedPixel (i)) << i;
+  }
+}
+
+TEST (MixedPixelFilter, NegativeOutputsExactlyTheMixedPixels)
+{
+  for (int columns : {1, 2})
+  {
+    SCOPED_TRACE (std::to_string (columns) + " mixed column(s)");
+    const StepEdge edge (columns);
+    Mixed filter (true);
+    filter.setInputCloud (edge.cloud);
+    filter.setNegative (true);
+    pcl::Indices mixed;
+    filter.filter (mixed);
+    EXPECT_EQ (sorted (mixed), edge.mixed);
+    // NaN points are removed in negative mode too, as pcl::PassThrough does.
+    std::vector<int> removed = edge.planes;
+    removed.insert (removed.end (), edge.nan.begin (), edge.nan.end ());
+    EXPECT_EQ (sorted (*filter.getRemovedIndices ()), sorted (removed));
+
+    // The same points as a cloud.
+    Cloud out;
+    filter.filter (out);
+    ASSERT_EQ (out.size (), edge.mixed.size ());
+    for (std::size_t j = 0; j < out.size (); ++j)
+      EXPECT_EQ (bits (out[j].z), bits ((*edge.cloud)[edge.mixed[j]].z));
+  }
+}
+
+TEST (MixedPixelFilter, NanConventionMatchesPassThrough)
+{
+  // The PCL reference: pcl::PassThrough drops non-finite points whatever
+  // negative says, and lists them among the removed indices.
+  const StepEdge edge (2);
+  for (bool negative : {false, true})
+  {
+    SCOPED_TRACE (negative ? "negative" : "positive");
+    pcl::PassThrough<pcl::PointXYZ> pass (true);
+    pass.setInputCloud (edge.cloud);
+    pass.setFilterFieldName ("z");
+    pass.setFilterLimits (negative ? 100.f : 0.f, negative ? 200.f : 100.f);  // keeps every finite point
+    pass.setNegative (negative);
+    pcl::Indices pass_kept;
+    pass.filter (pass_kept);
+    ASSERT_EQ (sorted (*pass.getRemovedIndices ()), edge.nan);
+
+    Mixed filter (true);
+    filter.setInputCloud (edge.cloud);
+    filter.setNegative (negative);
+    pcl::Indices kept;
+    filter.filter (kept);
+    const auto &removed = *filter.getRemovedIndices ();
+    for (const int i : edge.nan)
+    {
+      EXPECT_TRUE (std::find (removed.begin (), removed.end (), i) != removed.end ()) << i;
+      EXPECT_TRUE (std::find (kept.begin (), kept.end (), i) == kept.end ()) << i;
+    }
+    EXPECT_EQ (kept.size () + removed.size (), edge.cloud->size ());
+  }
+}
+
+TEST (MixedPixelFilter, KeepOrganizedBlanksTheRemovedPoints)
+{
+  const StepEdge edge (2);
+  for (bool negative : {false, true})
+  {
+    SCOPED_TRACE (negative ? "negative" : "positive");
+    Mixed filter;
+    filter.setInputCloud (edge.cloud);
+    filter.setNegative (negative);
+    filter.setKeepOrganized (true);
+    Cloud out;
+    filter.filter (out);
+    ASSERT_EQ (out.width, edge.cloud->width);
+    ASSERT_EQ (out.height, edge.cloud->height);
+    EXPECT_FALSE (out.is_dense);
+    const std::set<int> mixed (edge.mixed.begin (), edge.mixed.end ());
+    for (int i = 0; i < static_cast<int> (out.size ()); ++i)
+    {
+      const bool should_keep = isFinite ((*edge.cloud)[i]) && (mixed.count (i) > 0) == negative;
+      if (should_keep)
+      {
+        EXPECT_EQ (bits (out[i].x), bits ((*edge.cloud)[i].x)) << i;
+        EXPECT_EQ (bits (out[i].y), bits ((*edge.cloud)[i].y)) << i;
+        EXPECT_EQ (bits (out[i].z), bits ((*edge.cloud)[i].z)) << i;
+      }
+      else
+      {
+        EXPECT_TRUE (std::isnan (out[i].x) && std::isnan (out[i].y) && std::isnan (out[i].z)) << i;
+      }
+    }
+  }
+}
+
+TEST (MixedPixelFilter, SetIndicesRestrictsTestAndOutput)
+{
+  const StepEdge edge (2);
+  // Rows 0..7, plus nothing else: the NaN pixel (5, 3) is among them.
+  pcl::IndicesPtr rows (new pcl::Indices);
+  for (int i = 0; i < 8 * StepEdge::kWidth; ++i)
+    rows->push_back (i);
+  Mixed filter (true);
+  filter.setInputCloud (edge.cloud);
+  filter.setIndices (rows);
+  pcl::Indices kept;
+  filter.filter (kept);
+  std::vector<int> expected_kept, expected_removed;
+  for (const int i : *rows)
+  {
+    const bool plane = std::binary_search (edge.planes.begin (), edge.planes.end (), i);
+    (plane ? expected_kept : expected_removed).push_back (i);
+  }
+  EXPECT_EQ (sorted (kept), expected_kept);
+  EXPECT_EQ (sorted (*filter.getRemovedIndices ()), expected_removed) << "removed = complement within the indices";
+
+  // Only the two mixed columns and one foreground pixel selected: neighbours are
+  // still read from the whole cloud, so the mixed pixels are still recognised.
+  pcl::IndicesPtr few (new pcl::Indices{5 * StepEdge::kWidth + 3, 5 * StepEdge::kWidth + 20,
+                                        5 * StepEdge::kWidth + 21, 17 * StepEdge::kWidth + 21});
+  filter.setIndices (few);
+  filter.filter (kept);
+  EXPECT_EQ (sorted (kept), std::vector<int> ({5 * StepEdge::kWidth + 3}));
+  filter.setNegative (true);
+  filter.filter (kept);
+  EXPECT_EQ (sorted (kept), std::vector<int> ({5 * StepEdge::kWidth + 20, 5 * StepEdge::kWidth + 21,
+                                               17 * StepEdge::kWidth + 21}));
+  EXPECT_EQ (sorted (*filter.getRemovedIndices ()), std::vector<int> ({5 * StepEdge::kWidth + 3}));
+}
+
+/** A floor seen from a camera 2 m above it looking horizontally, rows 18 to 24.5
+  * degrees below the horizon (a crop of a 640x480 frame's bottom 70 rows), 4.4 to
+  * 6.2 m away. Neighbouring ranges differ by more than the minimum jump, and each
+  * pixel's range lies between its neighbours', so only the veil angle (the surface
+  * is at 18-24.5 degrees to the rays, above the 15 degree limit) keeps it. */
+Cloud::Ptr
+grazingFloor (double &min_grazing_deg, double &max_grazing_deg)
+{
+  Camera cam;
+  cam.width = 64;
+  cam.height = 70;
+  cam.cx = 31.5;
+  cam.cy = 239.5 - 410.0;
+  Cloud::Ptr cloud = nanCloud (cam.width, cam.height);
+  min_grazing_deg = 90.0;
+  max_grazing_deg = 0.0;
+  for (int v = 0; v < cam.height; ++v)
+    for (int u = 0; u < cam.width; ++u)
+    {
+      const Eigen::Vector3d ray ((u - cam.cx) / cam.fx, (v - cam.cy) / cam.fy, 1.0);
+      const double t = 2.0 / ray.y ();  // floor: y = 2 (y points down)
+      (*cloud) (u, v) = rayPoint (cam, u, v, t);
+      const double grazing = std::asin (ray.normalized ().y ()) * 180.0 / M_PI;  // ray vs floor plane
+      min_grazing_deg = std::min (min_grazing_deg, grazing);
+      max_grazing_deg = std::max (max_grazing_deg, grazing);
+    }
+  return cloud;
+}
+
+TEST (MixedPixelFilter, GrazingFloorIsNotRemoved)
+{
+  double min_grazing = 0.0, max_grazing = 0.0;
+  const Cloud::Ptr floor = grazingFloor (min_grazing, max_grazing);
+  // The fixture is meaningful: the floor is seen at a grazing angle above 15 degrees...
+  ASSERT_GT (min_grazing, 17.0);
+  ASSERT_LT (max_grazing, 25.0);
+  // ... and its range jumps across a 2-pixel window exceed the 5 cm minimum jump.
+  int large_jumps = 0, tested = 0;
+  for (int v = 2; v + 2 < static_cast<int> (floor->height); ++v)
+  {
+    ++tested;
+    const float jump = (*floor) (32, v - 2).getVector3fMap ().norm () - (*floor) (32, v + 2).getVector3fMap ().norm ();
+    large_jumps += jump >= 0.05f;
+  }
+  ASSERT_EQ (large_jumps, tested);
+
+  Mixed filter (true);
+  filter.setInputCloud (floor);
+  // isMixedPixel is public: it must use the configured veil angle before any filter() run.
+  EXPECT_FALSE (filter.isMixedPixel (35 * 64 + 32)) << "isMixedPixel before filter()";
+  pcl::Indices kept;
+  filter.filter (kept);
+  EXPECT_EQ (kept.size (), floor->size ()) << "a floor seen at 18-24 degrees is a surface, not a veil";
+  EXPECT_TRUE (filter.getRemovedIndices ()->empty ());
+
+  // Control: allow veils up to 35 degrees and the same floor is (wrongly) taken
+  // for one, which shows that the angle is what saves it above.
+  filter.setMaxVeilAngle (35.f);
+  EXPECT_TRUE (filter.isMixedPixel (35 * 64 + 32)) << "isMixedPixel after setMaxVeilAngle(35)";
+  filter.filter (kept);
+  EXPECT_GT (filter.getRemovedIndices ()->size (), floor->size () * 8 / 10);
+}
+
+TEST (MixedPixelFilter, UnorganizedOrEmptyCloudGivesEmptyOutput)
+{
+  QuietPcl quiet;
+  Cloud::Ptr flat (new Cloud);
+  for (int i = 0; i < 100; ++i)
+    flat->push_back (pcl::PointXYZ (0.01f * i, 0.f, i < 50 ? 1.5f : 3.f));
+  ASSERT_FALSE (flat->isOrganized ());
+  for (const Cloud::Ptr &cloud : {flat, Cloud::Ptr (new Cloud), nanCloud (30, 20)})
+  {
+    SCOPED_TRACE (std::to_string (cloud->width) + "x" + std::to_string (cloud->height));
+    for (bool negative : {false, true})
+    {
+      Mixed filter (true);
+      filter.setInputCloud (cloud);
+      filter.setNegative (negative);
+      pcl::Indices kept{1, 2, 3};
+      filter.filter (kept);
+      EXPECT_TRUE (kept.empty ());
+      Cloud out;
+      filter.filter (out);
+      EXPECT_TRUE (out.empty ());
+    }
+  }
+}
+
+// ---------------------------------------------------------------------------
+// 4. SurfaceSegmentation
+
+/** An all-NaN w x h cloud to draw rectangles in. */
+Cloud::Ptr
+gridCloud (int width, int height)
+{
+  return nanCloud (width, height);
+}
+
+/** Fills pixels (u0..u0+w-1, v0..v0+h-1) with a 4 mm grid at depth z. */
+void
+fillRect (Cloud &cloud, int u0, int v0, int w, int h, float z = 2.f)
+{
+  for (int v = v0; v < v0 + h; ++v)
+    for (int u = u0; u < u0 + w; ++u)
+      cloud (u, v) = pcl::PointXYZ (0.004f * u, 0.004f * v, z);
+}
+
+/** The label cloud agrees with the meshes, which are disjoint and sorted. */
+void
+expectLabelsMatchMeshes (const pcl::PointCloud<pcl::Label> &labels, const std::vector<pcl::PointIndices> &meshes,
+                         const Cloud &cloud)
+{
+  ASSERT_EQ (labels.width, cloud.width);
+  ASSERT_EQ (labels.height, cloud.height);
+  ASSERT_EQ (labels.size (), cloud.size ());
+  std::vector<std::uint32_t> expected (cloud.size (), Segmentation::kUnlabelled);
+  for (std::size_t m = 0; m < meshes.size (); ++m)
+  {
+    EXPECT_TRUE (std::is_sorted (meshes[m].indices.begin (), meshes[m].indices.end ()));
+    if (m > 0)
+    {
+      EXPECT_GE (meshes[m - 1].indices.size (), meshes[m].indices.size ()) << "largest first";
+    }
+    for (const int i : meshes[m].indices)
+    {
+      EXPECT_EQ (expected[i], Segmentation::kUnlabelled) << "index " << i << " in two meshes";
+      EXPECT_TRUE (isFinite (cloud[i]));
+      expected[i] = static_cast<std::uint32_t> (m);
+    }
+  }
+  for (std::size_t i = 0; i < cloud.size (); ++i)
+    EXPECT_EQ (labels[i].label, expected[i]) << "point " << i;
+}
+
+std::vector<std::size_t>
+sizes (const std::vector<pcl::PointIndices> &meshes)
+{
+  std::vector<std::size_t> s;
+  for (const auto &m : meshes)
+    s.push_back (m.indices.size ());
+  return s;
+}
+
+TEST (SurfaceSegmentation, DiagonalNeighboursAreConnected)
+{
+  Cloud::Ptr cloud = gridCloud (12, 12);
+  fillRect (*cloud, 1, 1, 4, 4);  // (1..4, 1..4)
+  fillRect (*cloud, 5, 5, 4, 4);  // (5..8, 5..8): touches the first only at (4,4)-(5,5)
+  Segmentation seg;
+  seg.setInputCloud (cloud);
+  pcl::PointCloud<pcl::Label> labels;
+  std::vector<pcl::PointIndices> meshes;
+  seg.segment (labels, meshes);
+  ASSERT_EQ (meshes.size (), 1u) << "8-connected: one mesh";
+  EXPECT_EQ (meshes[0].indices.size (), 32u);
+  expectLabelsMatchMeshes (labels, meshes, *cloud);
+
+  // PCL's organized connected components are 4-connected and split the two squares.
+  pcl::EuclideanClusterComparator<pcl::PointXYZ, pcl::Label>::Ptr comparator (
+      new pcl::EuclideanClusterComparator<pcl::PointXYZ, pcl::Label>);
+  comparator->setInputCloud (cloud);
+  comparator->setDistanceThreshold (0.05f, false);
+  pcl::OrganizedConnectedComponentSegmentation<pcl::PointXYZ, pcl::Label> pcl_seg (comparator);
+  pcl_seg.setInputCloud (cloud);
+  pcl::PointCloud<pcl::Label> pcl_labels;
+  std::vector<pcl::PointIndices> pcl_components;
+  pcl_seg.segment (pcl_labels, pcl_components);
+  const std::uint32_t a = pcl_labels (1, 1).label, b = pcl_labels (5, 5).label;
+  EXPECT_EQ (pcl_labels (4, 4).label, a);
+  EXPECT_EQ (pcl_labels (8, 8).label, b);
+  EXPECT_NE (a, b) << "PCL's 4-connected segmentation joins diagonal neighbours?";
+
+  // Control: one more pixel apart, the squares are two meshes.
+  cloud = gridCloud (12, 12);
+  fillRect (*cloud, 1, 1, 4, 4);
+  fillRect (*cloud, 6, 5, 4, 4);
+  seg.setInputCloud (cloud);
+  seg.segment (labels, meshes);
+  EXPECT_EQ (sizes (meshes), std::vector<std::size_t> ({16, 16}));
+  expectLabelsMatchMeshes (labels, meshes, *cloud);
+}
+
+TEST (SurfaceSegmentation, DeltaConnectedSplitsAtADepthJump)
+{
+  Cloud::Ptr cloud = gridCloud (20, 10);
+  fillRect (*cloud, 0, 0, 10, 10, 2.0f);
+  fillRect (*cloud, 10, 0, 10, 10, 2.1f);  // a 10 cm step
+  Segmentation seg;
+  seg.setInputCloud (cloud);
+  pcl::PointCloud<pcl::Label> labels;
+  std::vector<pcl::PointIndices> meshes;
+  seg.segment (labels, meshes);  // default delta_connected 0.05
+  ASSERT_EQ (sizes (meshes), std::vector<std::size_t> ({100, 100}));
+  EXPECT_EQ (meshes[0].indices.front (), 0) << "equal sizes: the one with the lowest first index first";
+  EXPECT_EQ (labels (9, 5).label, 0u);
+  EXPECT_EQ (labels (10, 5).label, 1u);
+  expectLabelsMatchMeshes (labels, meshes, *cloud);
+
+  seg.setDeltaConnected (0.12f);  // the step (10.0 cm, 10.1 cm diagonally) is now an edge
+  seg.segment (labels, meshes);
+  EXPECT_EQ (sizes (meshes), std::vector<std::size_t> ({200}));
+  expectLabelsMatchMeshes (labels, meshes, *cloud);
+}
+
+TEST (SurfaceSegmentation, MeshSizeLimitsAndOrder)
+{
+  // Blobs in scan order: 4, 1, 30, 12 points (so sorting is not scan order).
+  Cloud::Ptr cloud = gridCloud (30, 20);
+  fillRect (*cloud, 0, 0, 2, 2);     // 4
+  fillRect (*cloud, 5, 0, 1, 1);     // 1
+  fillRect (*cloud, 10, 3, 5, 6);    // 30
+  fillRect (*cloud, 20, 10, 3, 4);   // 12
+  Segmentation seg;
+  seg.setInputCloud (cloud);
+  pcl::PointCloud<pcl::Label> labels;
+  std::vector<pcl::PointIndices> meshes;
+
+  seg.segment (labels, meshes);
+  EXPECT_EQ (sizes (meshes), std::vector<std::size_t> ({30, 12, 4, 1}));
+  expectLabelsMatchMeshes (labels, meshes, *cloud);
+
+  seg.setMinMeshSize (4);
+  seg.segment (labels, meshes);
+  EXPECT_EQ (sizes (meshes), std::vector<std::size_t> ({30, 12, 4}));
+  expectLabelsMatchMeshes (labels, meshes, *cloud);
+  EXPECT_EQ (labels (5, 0).label, Segmentation::kUnlabelled) << "a dropped mesh is unlabelled";
+
+  seg.setMaxMeshSize (12);
+  seg.segment (labels, meshes);
+  EXPECT_EQ (sizes (meshes), std::vector<std::size_t> ({12, 4}));
+  expectLabelsMatchMeshes (labels, meshes, *cloud);
+
+  seg.setMinMeshSize (1);
+  seg.segment (meshes);  // the overload without labels gives the same meshes
+  EXPECT_EQ (sizes (meshes), std::vector<std::size_t> ({12, 4, 1}));
+
+  QuietPcl quiet;
+  seg.setMinMeshSize (20);  // min > max: invalid
+  seg.segment (labels, meshes);
+  EXPECT_TRUE (meshes.empty ());
+}
+
+TEST (SurfaceSegmentation, IndicesRestrictTheMeshes)
+{
+  Cloud::Ptr cloud = gridCloud (10, 10);
+  fillRect (*cloud, 0, 0, 10, 10);
+  // Only columns 0..2 and 6..9: two meshes, the middle columns take no part.
+  pcl::IndicesPtr indices (new pcl::Indices);
+  for (int v = 0; v < 10; ++v)
+    for (int u : {0, 1, 2, 6, 7, 8, 9})
+      indices->push_back (v * 10 + u);
+  Segmentation seg;
+  seg.setInputCloud (cloud);
+  seg.setIndices (indices);
+  pcl::PointCloud<pcl::Label> labels;
+  std::vector<pcl::PointIndices> meshes;
+  seg.segment (labels, meshes);
+  ASSERT_EQ (sizes (meshes), std::vector<std::size_t> ({40, 30}));
+  EXPECT_EQ (meshes[0].indices.front (), 6);
+  expectLabelsMatchMeshes (labels, meshes, *cloud);
+}
+
+TEST (SurfaceSegmentation, UnorganizedEmptyOrAllNanInputGivesNoMeshes)
+{
+  QuietPcl quiet;
+  Cloud::Ptr flat (new Cloud);
+  for (int i = 0; i < 100; ++i)
+    flat->push_back (pcl::PointXYZ (0.004f * i, 0.f, 2.f));
+  for (const Cloud::Ptr &cloud : {flat, Cloud::Ptr (new Cloud), nanCloud (30, 20)})
+  {
+    SCOPED_TRACE (std::to_string (cloud->width) + "x" + std::to_string (cloud->height));
+    Segmentation seg;
+    seg.setInputCloud (cloud);
+    pcl::PointCloud<pcl::Label> labels;
+    std::vector<pcl::PointIndices> meshes (3);
+    seg.segment (labels, meshes);
+    EXPECT_TRUE (meshes.empty ());
+    if (cloud->isOrganized ())
+    {
+      ASSERT_EQ (labels.size (), cloud->size ());
+      for (const auto &l : labels)
+        EXPECT_EQ (l.label, Segmentation::kUnlabelled);
+    }
+    else
+    {
+      EXPECT_TRUE (labels.empty ());
+    }
+  }
+}
+}  // namespace

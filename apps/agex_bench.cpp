@@ -3,6 +3,7 @@
 // multi-source Dijkstra and with the naive k-full-runs reference on the same
 // meshes, and the whole depth pipeline stage by stage. Single-threaded.
 
+#include <agex/apps/command_line.h>
 #include <agex/apps/depth_pipeline.h>
 #include <agex/apps/output.h>
 #include <agex/common/atomic_file.h>
@@ -151,14 +152,8 @@ main (int argc, char **argv)
 
   try
   {
-    po::variables_map vm;
-    po::store (po::command_line_parser (argc, argv).options (all).positional (positional).run (), vm);
-    if (vm.count ("help"))
-    {
-      std::cout << all << "\n";
+    if (!agex::apps::parseCommandLine (argc, argv, all, positional))
       return 0;
-    }
-    po::notify (vm);
     agex::apps::finishPipelineOptions (vector_flags, params);
     if (k < 1 || repeat < 1)
       throw std::runtime_error ("--bench-k and --repeat must be at least 1");

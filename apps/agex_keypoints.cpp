@@ -2,6 +2,7 @@
 // Runs the depth pipeline (denoise, mixed pixels, crop, floor, meshes, AGEX) and
 // writes the points as JSON and an overlay PNG.
 
+#include <agex/apps/command_line.h>
 #include <agex/apps/depth_pipeline.h>
 #include <agex/apps/output.h>
 #include <agex/common/atomic_file.h>
@@ -34,14 +35,8 @@ main (int argc, char **argv)
 
   try
   {
-    po::variables_map vm;
-    po::store (po::command_line_parser (argc, argv).options (all).positional (positional).run (), vm);
-    if (vm.count ("help"))
-    {
-      std::cout << all << "\n";
+    if (!agex::apps::parseCommandLine (argc, argv, all, positional))
       return 0;
-    }
-    po::notify (vm);
     if (input.empty ())
       throw std::runtime_error ("no INPUT frame given (see --help)");
     agex::apps::finishPipelineOptions (vector_flags, params);

@@ -21,16 +21,6 @@ using namespace agex_test;
 using Agex = agex::AGEXKeypoint<pcl::PointXYZ, agex::InterestPoint>;
 using IPCloud = pcl::PointCloud<agex::InterestPoint>;
 
-/** Keeps the expected PCL_ERROR messages of bad-input tests out of the log. */
-class QuietPcl
-{
-public:
-  QuietPcl () : level_ (pcl::console::getVerbosityLevel ()) { pcl::console::setVerbosityLevel (pcl::console::L_ALWAYS); }
-  ~QuietPcl () { pcl::console::setVerbosityLevel (level_); }
-
-private:
-  pcl::console::VERBOSITY_LEVEL level_;
-};
 
 struct AgexRun
 {

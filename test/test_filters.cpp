@@ -20,15 +20,6 @@ using namespace agex_test;
 using Mixed = agex::MixedPixelFilter<pcl::PointXYZ>;
 using Segmentation = agex::SurfaceSegmentation<pcl::PointXYZ>;
 
-class QuietPcl
-{
-public:
-  QuietPcl () : level_ (pcl::console::getVerbosityLevel ()) { pcl::console::setVerbosityLevel (pcl::console::L_ALWAYS); }
-  ~QuietPcl () { pcl::console::setVerbosityLevel (level_); }
-
-private:
-  pcl::console::VERBOSITY_LEVEL level_;
-};
 
 std::vector<int>
 sorted (std::vector<int> v)

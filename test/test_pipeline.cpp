@@ -287,15 +287,6 @@ TEST (BonnPipeline, IncrementalEqualsNaiveOnRealFrames)
 // ---------------------------------------------------------------------------
 // 7. Degenerate input to the whole pipeline
 
-class QuietPcl
-{
-public:
-  QuietPcl () : level_ (pcl::console::getVerbosityLevel ()) { pcl::console::setVerbosityLevel (pcl::console::L_ALWAYS); }
-  ~QuietPcl () { pcl::console::setVerbosityLevel (level_); }
-
-private:
-  pcl::console::VERBOSITY_LEVEL level_;
-};
 
 TEST (PipelineBadInput, AllNanFrame)
 {

@@ -5,6 +5,7 @@
 
 #include <agex/common/point_types.h>
 
+#include <pcl/console/print.h>
 #include <pcl/point_cloud.h>
 #include <pcl/point_types.h>
 
@@ -31,6 +32,17 @@ namespace agex_test
 {
 namespace fs = std::filesystem;
 using Cloud = pcl::PointCloud<pcl::PointXYZ>;
+
+/** Keeps the expected PCL_ERROR messages of bad-input tests out of the log. */
+class QuietPcl
+{
+public:
+  QuietPcl () : level_ (pcl::console::getVerbosityLevel ()) { pcl::console::setVerbosityLevel (pcl::console::L_ALWAYS); }
+  ~QuietPcl () { pcl::console::setVerbosityLevel (level_); }
+
+private:
+  pcl::console::VERBOSITY_LEVEL level_;
+};
 
 /** Path of a file under the shared data directory (../shared/data by default). */
 inline std::string

@@ -1,9 +1,10 @@
-// agex::MixedPixelFilter against PCL's filter conventions, and
-// agex::SurfaceSegmentation (8-connected meshes), on synthetic organized clouds.
+// agex::MixedPixelFilter and agex::SpurFilter against PCL's filter conventions,
+// and agex::SurfaceSegmentation (8-connected meshes), on synthetic organized clouds.
 
 #include "test_support.h"
 
 #include <agex/filters/mixed_pixel_filter.h>
+#include <agex/filters/spur_filter.h>
 #include <agex/filters/surface_segmentation.h>
 
 #include <pcl/console/print.h>
@@ -12,12 +13,15 @@
 #include <pcl/segmentation/organized_connected_component_segmentation.h>
 
 #include <algorithm>
+#include <iterator>
 #include <set>
+#include <tuple>
 
 namespace
 {
 using namespace agex_test;
 using Mixed = agex::MixedPixelFilter<pcl::PointXYZ>;
+using Spur = agex::SpurFilter<pcl::PointXYZ>;
 using Segmentation = agex::SurfaceSegmentation<pcl::PointXYZ>;
 
 
@@ -506,5 +510,318 @@ TEST (SurfaceSegmentation, UnorganizedEmptyOrAllNanInputGivesNoMeshes)
       EXPECT_TRUE (labels.empty ());
     }
   }
+}
+
+// ---------------------------------------------------------------------------
+// 5. SpurFilter
+
+/** Chebyshev distance (pixels) from pixel i to the nearest non-finite pixel or the
+  * outside of the image: a pixel d > n away from both has all 8 neighbours for n
+  * erosion passes on a flat grid, so it survives them. */
+int
+distanceToMissing (const Cloud &cloud, int i)
+{
+  const int w = static_cast<int> (cloud.width), h = static_cast<int> (cloud.height);
+  const int u = i % w, v = i / w;
+  int d = std::min ({u + 1, v + 1, w - u, h - v});
+  for (int j = 0; j < static_cast<int> (cloud.size ()); ++j)
+    if (!isFinite (cloud[j]))
+      d = std::min (d, std::max (std::abs (j % w - u), std::abs (j / w - v)));
+  return d;
+}
+
+/** Indices of the pixels of the rectangle (u0..u0+w-1, v0..v0+h-1) of a cloud width wide, increasing. */
+std::vector<int>
+rectIndices (int width, int u0, int v0, int w, int h)
+{
+  std::vector<int> indices;
+  for (int v = v0; v < v0 + h; ++v)
+    for (int u = u0; u < u0 + w; ++u)
+      indices.push_back (v * width + u);
+  return indices;
+}
+
+std::vector<int>
+finiteIndices (const Cloud &cloud, bool finite = true)
+{
+  std::vector<int> indices;
+  for (int i = 0; i < static_cast<int> (cloud.size ()); ++i)
+    if (isFinite (cloud[i]) == finite)
+      indices.push_back (i);
+  return indices;
+}
+
+std::vector<int>
+spurKept (const Cloud::Ptr &cloud, int iterations, int min_connected = 6, float delta = 0.05f)
+{
+  Spur filter;
+  filter.setInputCloud (cloud);
+  filter.setIterations (iterations);
+  filter.setMinConnected (min_connected);
+  filter.setDeltaConnected (delta);
+  pcl::Indices kept;
+  filter.filter (kept);
+  return sorted (kept);
+}
+
+/** A 16x16 square (columns and rows 6..21) in a 32x32 NaN frame, with teeth of
+  * lengths 1..6 on its right edge (rows 7, 9, ..., 17: one-pixel strands). */
+struct Comb
+{
+  static constexpr int kSize = 32, kFirst = 6, kSide = 16;
+  Cloud::Ptr cloud = gridCloud (kSize, kSize);
+  std::vector<int> square;
+  std::vector<std::pair<int, int>> teeth;  // row, length
+  Comb ()
+  {
+    fillRect (*cloud, kFirst, kFirst, kSide, kSide);
+    square = rectIndices (kSize, kFirst, kFirst, kSide, kSide);
+    for (int t = 0; t < 6; ++t)
+    {
+      teeth.emplace_back (7 + 2 * t, t + 1);
+      fillRect (*cloud, kFirst + kSide, 7 + 2 * t, t + 1, 1);
+    }
+  }
+};
+
+TEST (SpurFilter, OnePixelStrandGoesInteriorStays)
+{
+  // A 16x16 square (6..21) with three one-pixel strands: 8 pixels out of its right
+  // edge, 6 up from its top edge to the image border, 4 diagonally off a corner.
+  Cloud::Ptr cloud = gridCloud (32, 32);
+  fillRect (*cloud, 6, 6, 16, 16);
+  std::vector<int> strands;
+  for (int u = 22; u < 30; ++u)
+    strands.push_back (13 * 32 + u);
+  for (int v = 0; v < 6; ++v)
+    strands.push_back (v * 32 + 10);
+  for (int k = 1; k <= 4; ++k)
+    strands.push_back ((21 + k) * 32 + 21 + k);
+  for (const int i : strands)
+    (*cloud)[i] = pcl::PointXYZ (0.004f * (i % 32), 0.004f * (i / 32), 2.f);
+
+  Spur filter (true);
+  EXPECT_EQ (filter.getIterations (), 3);
+  EXPECT_EQ (filter.getMinConnected (), 6);
+  EXPECT_FLOAT_EQ (filter.getDeltaConnected (), 0.05f);
+  filter.setInputCloud (cloud);
+  pcl::Indices kept;
+  filter.filter (kept);
+  kept = sorted (kept);
+  const auto &removed = *filter.getRemovedIndices ();
+  for (const int i : strands)
+  {
+    EXPECT_TRUE (std::find (removed.begin (), removed.end (), i) != removed.end ()) << "strand pixel " << i;
+    EXPECT_FALSE (std::binary_search (kept.begin (), kept.end (), i)) << "strand pixel " << i;
+  }
+  // The interior (3+ pixels inside the square) stays, whatever the strands.
+  for (const int i : rectIndices (32, 9, 9, 10, 10))
+    EXPECT_TRUE (std::binary_search (kept.begin (), kept.end (), i)) << "interior pixel " << i;
+  // And nothing deeper than 3 pixels from the silhouette goes.
+  for (const int i : removed)
+    if (isFinite ((*cloud)[i]))
+    {
+      EXPECT_LE (distanceToMissing (*cloud, i), 3) << "removed pixel " << i;
+    }
+
+  // Without the strands the square erodes to exactly the 10x10 interior.
+  Cloud::Ptr square = gridCloud (32, 32);
+  fillRect (*square, 6, 6, 16, 16);
+  EXPECT_EQ (spurKept (square, 3), rectIndices (32, 9, 9, 10, 10));
+}
+
+TEST (SpurFilter, IterationsBoundHowFarTheErosionGoes)
+{
+  // A square loses one ring per pass (its edge pixels have 5 connected
+  // neighbours, fewer than 6), down to nothing.
+  Cloud::Ptr square = gridCloud (32, 32);
+  fillRect (*square, 6, 6, 16, 16);
+  for (int n = 0; n <= 8; ++n)
+    EXPECT_EQ (spurKept (square, n), rectIndices (32, 6 + n, 6 + n, 16 - 2 * n, 16 - 2 * n)) << n << " passes";
+  EXPECT_TRUE (spurKept (square, 50).empty ());
+
+  // A ragged edge: with min_connected 2, a tooth loses its tip pixel per pass and
+  // the square (edge pixels: 5 neighbours, corners 3) stays whole; the pixel that
+  // joins a tooth to the square has 3 square neighbours and always stays.
+  const Comb comb;
+  for (int n = 0; n <= 7; ++n)
+  {
+    SCOPED_TRACE (std::to_string (n) + " passes, min_connected 2");
+    std::vector<int> expected = comb.square;
+    for (const auto &[row, length] : comb.teeth)
+      for (int k = 0; k < std::max (length - n, 1); ++k)
+        expected.push_back (row * Comb::kSize + Comb::kFirst + Comb::kSide + k);
+    EXPECT_EQ (spurKept (comb.cloud, n, 2), sorted (expected));
+  }
+
+  // With the defaults the erosion reaches exactly n pixels deep: everything
+  // deeper stays, and some pixel n deep goes.
+  std::vector<int> depth (comb.cloud->size (), 0);
+  for (int i = 0; i < static_cast<int> (comb.cloud->size ()); ++i)
+    if (isFinite ((*comb.cloud)[i]))
+      depth[i] = distanceToMissing (*comb.cloud, i);
+  for (int n = 1; n <= 5; ++n)
+  {
+    SCOPED_TRACE (std::to_string (n) + " passes, defaults");
+    const std::vector<int> kept = spurKept (comb.cloud, n);
+    int deepest_removed = 0;
+    for (const int i : finiteIndices (*comb.cloud))
+    {
+      const bool is_kept = std::binary_search (kept.begin (), kept.end (), i);
+      if (depth[i] > n)
+      {
+        EXPECT_TRUE (is_kept) << "pixel " << i << " is " << depth[i] << " deep";
+      }
+      if (!is_kept)
+        deepest_removed = std::max (deepest_removed, depth[i]);
+    }
+    EXPECT_EQ (deepest_removed, n);
+  }
+}
+
+TEST (SpurFilter, DepthJumpsAreNotConnections)
+{
+  // A 20x10 plane with a 10 cm step in the middle: across it neighbours are not
+  // connected, so the columns on both sides of the step erode like an edge.
+  Cloud::Ptr cloud = gridCloud (24, 14);
+  fillRect (*cloud, 2, 2, 10, 10, 2.0f);
+  fillRect (*cloud, 12, 2, 10, 10, 2.1f);
+  std::vector<int> expected = rectIndices (24, 3, 3, 8, 8), right = rectIndices (24, 13, 3, 8, 8);
+  expected.insert (expected.end (), right.begin (), right.end ());
+  EXPECT_EQ (spurKept (cloud, 1, 6, 0.05f), sorted (expected));
+  // With delta_connected above the step it is one surface: only the outer ring goes.
+  EXPECT_EQ (spurKept (cloud, 1, 6, 0.15f), rectIndices (24, 3, 3, 18, 8));
+}
+
+TEST (SpurFilter, NegativeAndRemovedIndicesFollowPassThrough)
+{
+  Comb comb;
+  (*comb.cloud) (12, 12) = nanPoint ();  // two holes in the square
+  (*comb.cloud) (17, 15) = nanPoint ();
+  const std::vector<int> finite = finiteIndices (*comb.cloud), nan = finiteIndices (*comb.cloud, false);
+  std::vector<int> kept[2], removed[2];
+  for (bool negative : {false, true})
+  {
+    Spur filter (true);
+    filter.setInputCloud (comb.cloud);
+    filter.setNegative (negative);
+    pcl::Indices out;
+    filter.filter (out);
+    kept[negative] = sorted (out);
+    removed[negative] = sorted (*filter.getRemovedIndices ());
+    EXPECT_EQ (kept[negative].size () + removed[negative].size (), comb.cloud->size ());
+
+    // The same points as a cloud.
+    Cloud points;
+    filter.filter (points);
+    ASSERT_EQ (points.size (), out.size ());
+    for (std::size_t j = 0; j < points.size (); ++j)
+      EXPECT_EQ (bits (points[j].z), bits ((*comb.cloud)[out[j]].z));
+  }
+  ASSERT_FALSE (kept[0].empty ());
+  ASSERT_FALSE (kept[1].empty ());
+  // Negative gives exactly the finite points the positive run removes ...
+  std::vector<int> all_kept;
+  std::merge (kept[0].begin (), kept[0].end (), kept[1].begin (), kept[1].end (), std::back_inserter (all_kept));
+  EXPECT_EQ (all_kept, finite) << "kept and negative-kept partition the finite points";
+  // ... and NaN points are removed in both modes, as pcl::PassThrough does.
+  std::vector<int> expected_removed[2];
+  for (bool negative : {false, true})
+  {
+    std::merge (kept[!negative].begin (), kept[!negative].end (), nan.begin (), nan.end (),
+                std::back_inserter (expected_removed[negative]));
+    EXPECT_EQ (removed[negative], expected_removed[negative]) << (negative ? "negative" : "positive");
+  }
+}
+
+TEST (SpurFilter, KeepOrganizedBlanksTheRemovedPoints)
+{
+  const Comb comb;
+  const std::vector<int> positive = spurKept (comb.cloud, 3);
+  for (bool negative : {false, true})
+  {
+    SCOPED_TRACE (negative ? "negative" : "positive");
+    Spur filter (true);
+    filter.setInputCloud (comb.cloud);
+    filter.setNegative (negative);
+    filter.setKeepOrganized (true);
+    Cloud out;
+    filter.filter (out);
+    ASSERT_EQ (out.width, comb.cloud->width);
+    ASSERT_EQ (out.height, comb.cloud->height);
+    EXPECT_FALSE (out.is_dense);
+    for (int i = 0; i < static_cast<int> (out.size ()); ++i)
+    {
+      const bool in_positive = std::binary_search (positive.begin (), positive.end (), i);
+      if (isFinite ((*comb.cloud)[i]) && in_positive != negative)
+      {
+        EXPECT_EQ (bits (out[i].x), bits ((*comb.cloud)[i].x)) << i;
+        EXPECT_EQ (bits (out[i].z), bits ((*comb.cloud)[i].z)) << i;
+      }
+      else
+      {
+        EXPECT_TRUE (std::isnan (out[i].x) && std::isnan (out[i].y) && std::isnan (out[i].z)) << i;
+      }
+    }
+  }
+}
+
+TEST (SpurFilter, SetIndicesOnlyThosePointsTakePart)
+{
+  // A full 20x20 plane; only columns 0..9 selected. Points outside the indices do
+  // not count as neighbours, so column 9 is an edge.
+  Cloud::Ptr cloud = gridCloud (20, 20);
+  fillRect (*cloud, 0, 0, 20, 20);
+  pcl::IndicesPtr left (new pcl::Indices (rectIndices (20, 0, 0, 10, 20)));
+  Spur filter (true);
+  filter.setInputCloud (cloud);
+  filter.setIterations (1);
+  filter.setIndices (left);
+  pcl::Indices kept;
+  filter.filter (kept);
+  const std::vector<int> expected = rectIndices (20, 1, 1, 8, 18);
+  EXPECT_EQ (sorted (kept), expected);
+  std::vector<int> expected_removed;
+  std::set_difference (left->begin (), left->end (), expected.begin (), expected.end (),
+                       std::back_inserter (expected_removed));
+  EXPECT_EQ (sorted (*filter.getRemovedIndices ()), expected_removed) << "removed = complement within the indices";
+
+  // Control: the whole frame erodes only at the image border.
+  EXPECT_EQ (spurKept (cloud, 1), rectIndices (20, 1, 1, 18, 18));
+}
+
+TEST (SpurFilter, UnorganizedEmptyAllNanOrBadParametersGiveEmptyOutput)
+{
+  QuietPcl quiet;
+  Cloud::Ptr flat (new Cloud);
+  for (int i = 0; i < 100; ++i)
+    flat->push_back (pcl::PointXYZ (0.004f * (i % 10), 0.004f * (i / 10), 2.f));
+  ASSERT_FALSE (flat->isOrganized ());
+  for (const Cloud::Ptr &cloud : {flat, Cloud::Ptr (new Cloud), nanCloud (30, 20)})
+  {
+    SCOPED_TRACE (std::to_string (cloud->width) + "x" + std::to_string (cloud->height));
+    for (bool negative : {false, true})
+    {
+      Spur filter (true);
+      filter.setInputCloud (cloud);
+      filter.setNegative (negative);
+      pcl::Indices kept{1, 2, 3};
+      filter.filter (kept);
+      EXPECT_TRUE (kept.empty ());
+      Cloud out;
+      filter.filter (out);
+      EXPECT_TRUE (out.empty ());
+    }
+  }
+  // Parameters out of range: an error and no output, not a guess.
+  const Comb comb;
+  for (const auto &[min_connected, iterations, delta] :
+       std::vector<std::tuple<int, int, float>>{{9, 3, 0.05f}, {-1, 3, 0.05f}, {6, -1, 0.05f}, {6, 3, 0.f}, {6, 3, nanf_ ()}})
+  {
+    SCOPED_TRACE ("min_connected " + std::to_string (min_connected) + ", iterations " + std::to_string (iterations) +
+                  ", delta " + std::to_string (delta));
+    EXPECT_TRUE (spurKept (comb.cloud, iterations, min_connected, delta).empty ());
+  }
+  EXPECT_FALSE (spurKept (comb.cloud, 3, 6, 0.05f).empty ()) << "control";
 }
 }  // namespace

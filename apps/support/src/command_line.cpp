@@ -3,7 +3,11 @@
 #include <boost/program_options/parsers.hpp>
 #include <boost/program_options/variables_map.hpp>
 
+#include <algorithm>
+
 #include <iostream>
+
+#include <unistd.h>
 
 namespace po = boost::program_options;
 
@@ -24,6 +28,26 @@ parseCommandLine (int argc, char **argv, const po::options_description &options,
   }
   po::notify (vm);
   return true;
+}
+
+Progress::Progress (std::string what, std::size_t total)
+  : what_ (std::move (what)), total_ (total), terminal_ (::isatty (2) != 0)
+{
+}
+
+void
+Progress::step (std::size_t done)
+{
+  if (terminal_)
+  {
+    std::cerr << "\r  " << what_ << " " << done << "/" << total_ << (done >= total_ ? "\n" : "") << std::flush;
+    return;
+  }
+  if (done >= next_report_ || done >= total_)
+  {
+    std::cerr << "  " << what_ << " " << done << "/" << total_ << "\n";
+    next_report_ = done + std::max<std::size_t> (1, total_ / 10);
+  }
 }
 }  // namespace apps
 }  // namespace agex

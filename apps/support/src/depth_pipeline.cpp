@@ -1,6 +1,7 @@
 #include <agex/apps/depth_pipeline.h>
 
 #include <agex/filters/mixed_pixel_filter.h>
+#include <agex/filters/spur_filter.h>
 #include <agex/filters/surface_segmentation.h>
 #include <agex/keypoints/agex_keypoint.h>
 
@@ -15,6 +16,7 @@
 #include <boost/program_options.hpp>
 
 #include <chrono>
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <sstream>
@@ -192,7 +194,43 @@ runDepthPipeline (const pcl::PointCloud<pcl::PointXYZ>::ConstPtr &input, const P
   }
   result.ms.emplace_back ("floor", msSince (start));
 
-  // 5. Surface meshes.
+  // 5. Spurs and ragged edges: geodesic extrema are drawn to them.
+  start = Clock::now ();
+  int spur_iterations = params.spur_iterations;
+  if (spur_iterations < 0 && cloud->isOrganized ())
+  {
+    // Auto: erode spur_depth metres whatever the resolution, measured with the
+    // median spacing of horizontally adjacent points.
+    std::vector<float> spacing;
+    for (std::size_t i = 0; i + 1 < cloud->size (); i += 7)
+      if (std::isfinite ((*cloud)[i].z) && std::isfinite ((*cloud)[i + 1].z) && (i + 1) % cloud->width != 0)
+        spacing.push_back (((*cloud)[i].getVector3fMap () - (*cloud)[i + 1].getVector3fMap ()).norm ());
+    spur_iterations = 0;
+    if (!spacing.empty ())
+    {
+      std::nth_element (spacing.begin (), spacing.begin () + spacing.size () / 2, spacing.end ());
+      const float median = spacing[spacing.size () / 2];
+      if (median > 0.f)
+        spur_iterations = std::clamp (static_cast<int> (std::lround (params.spur_depth / median)), 1, 16);
+    }
+  }
+  result.spur_iterations = spur_iterations;
+  if (spur_iterations > 0 && cloud->isOrganized ())
+  {
+    agex::SpurFilter<pcl::PointXYZ> spurs;
+    spurs.setInputCloud (cloud);
+    spurs.setMinConnected (params.spur_min_connected);
+    spurs.setIterations (spur_iterations);
+    spurs.setDeltaConnected (params.delta_connected);
+    spurs.setNegative (true);  // the spur points themselves, to blank them
+    pcl::Indices removed;
+    spurs.filter (removed);
+    for (const auto i : removed)
+      invalidate ((*cloud)[i]);
+  }
+  result.ms.emplace_back ("spurs", msSince (start));
+
+  // 6. Surface meshes.
   start = Clock::now ();
   const int min_mesh = params.min_mesh_size >= 0
                            ? params.min_mesh_size
@@ -207,7 +245,7 @@ runDepthPipeline (const pcl::PointCloud<pcl::PointXYZ>::ConstPtr &input, const P
   }
   result.ms.emplace_back ("segmentation", msSince (start));
 
-  // 6. AGEX interest points per mesh.
+  // 7. AGEX interest points per mesh.
   start = Clock::now ();
   if (cloud->isOrganized ())
   {
@@ -286,7 +324,12 @@ pipelineOptionsDescription (PipelineParams &p, std::vector<std::string> &storage
      "largest angle between the floor normal and up, degrees")
     ("floor-distance", floatValue (&p.floor_distance),
      "points closer than this to the floor plane are removed, metres")
-    ("naive", po::bool_switch (&p.naive), "reference AGEX: a full Dijkstra per point");
+    ("naive", po::bool_switch (&p.naive), "reference AGEX: a full Dijkstra per point")
+    ("spur-iterations", po::value (&p.spur_iterations)->default_value (p.spur_iterations, "auto"),
+     "erosion passes removing spurs and ragged edges (0: off); auto: --spur-depth over the point spacing")
+    ("spur-depth", floatValue (&p.spur_depth), "metres of ragged edge the auto erosion takes")
+    ("spur-min-connected", po::value (&p.spur_min_connected)->default_value (p.spur_min_connected),
+     "connected 8-neighbours a point needs to survive a pass");
   return desc;
 }
 

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <stdexcept>
 
 namespace agex
@@ -106,6 +107,60 @@ renderOverlay (const pcl::PointCloud<pcl::PointXYZ> &frame, const std::vector<pc
     cv::circle (image, centre, radius, cv::Scalar (0, 0, 0), 1, cv::LINE_AA);
     cv::putText (image, std::to_string (p.rank), centre + cv::Point (radius + 2, -radius),
                  cv::FONT_HERSHEY_SIMPLEX, 0.5, colour, 1, cv::LINE_AA);
+  }
+  return image;
+}
+cv::Scalar
+bodyPartColour (int part)
+{
+  static const cv::Scalar colours[] = {{40, 40, 220}, {40, 170, 40}, {220, 110, 30}};
+  return colours[std::clamp (part, 0, 2)];
+}
+
+cv::Mat
+renderPlot (const Plot &plot, int width, int height)
+{
+  cv::Mat image (height, width, CV_8UC3, cv::Scalar (255, 255, 255));
+  const int left = 70, right = 20, top = 40, bottom = 60;
+  const double sx = (width - left - right) / (plot.x_max - plot.x_min);
+  const double sy = (height - top - bottom) / (plot.y_max - plot.y_min);
+  auto to_pixel = [&] (double x, double y) {
+    return cv::Point (static_cast<int> (std::lround (left + (x - plot.x_min) * sx)),
+                      static_cast<int> (std::lround (height - bottom - (y - plot.y_min) * sy)));
+  };
+  const auto font = cv::FONT_HERSHEY_SIMPLEX;
+  auto label = [&] (double v) {
+    char text[32];
+    std::snprintf (text, sizeof text, "%g", std::abs (v) < 1e-12 ? 0.0 : v);
+    return std::string (text);
+  };
+  for (double x = plot.x_min; x <= plot.x_max + 1e-9; x += plot.x_tick)
+  {
+    cv::line (image, to_pixel (x, plot.y_min), to_pixel (x, plot.y_max), cv::Scalar (225, 225, 225), 1);
+    cv::putText (image, label (x), to_pixel (x, plot.y_min) + cv::Point (-8, 20), font, 0.45, cv::Scalar (0, 0, 0), 1,
+                 cv::LINE_AA);
+  }
+  for (double y = plot.y_min; y <= plot.y_max + 1e-9; y += plot.y_tick)
+  {
+    cv::line (image, to_pixel (plot.x_min, y), to_pixel (plot.x_max, y), cv::Scalar (225, 225, 225), 1);
+    cv::putText (image, label (y), to_pixel (plot.x_min, y) + cv::Point (-45, 5), font, 0.45, cv::Scalar (0, 0, 0), 1,
+                 cv::LINE_AA);
+  }
+  cv::rectangle (image, to_pixel (plot.x_min, plot.y_max), to_pixel (plot.x_max, plot.y_min), cv::Scalar (0, 0, 0), 1);
+  cv::putText (image, plot.title, cv::Point (left, 25), font, 0.6, cv::Scalar (0, 0, 0), 1, cv::LINE_AA);
+  cv::putText (image, plot.x_label, cv::Point (width / 2 - 40, height - 15), font, 0.5, cv::Scalar (0, 0, 0), 1,
+               cv::LINE_AA);
+  cv::putText (image, plot.y_label, cv::Point (5, top - 8), font, 0.5, cv::Scalar (0, 0, 0), 1, cv::LINE_AA);
+  for (std::size_t i = 0; i < plot.series.size (); ++i)
+  {
+    const auto &s = plot.series[i];
+    for (std::size_t j = 1; j < s.points.size (); ++j)
+      if (std::isfinite (s.points[j - 1].y) && std::isfinite (s.points[j].y))
+        cv::line (image, to_pixel (s.points[j - 1].x, s.points[j - 1].y), to_pixel (s.points[j].x, s.points[j].y),
+                  s.colour, 2, cv::LINE_AA);
+    const cv::Point legend (width - right - 170, height - bottom - 20 - 22 * static_cast<int> (plot.series.size () - 1 - i));
+    cv::line (image, legend, legend + cv::Point (25, 0), s.colour, 3, cv::LINE_AA);
+    cv::putText (image, s.name, legend + cv::Point (32, 5), font, 0.5, cv::Scalar (0, 0, 0), 1, cv::LINE_AA);
   }
   return image;
 }

@@ -3,6 +3,9 @@
 #include <boost/program_options/options_description.hpp>
 #include <boost/program_options/positional_options.hpp>
 
+#include <cstddef>
+#include <string>
+
 namespace agex
 {
 namespace apps
@@ -12,5 +15,20 @@ namespace apps
   * \throws boost::program_options::error on an unknown or malformed flag */
 bool parseCommandLine (int argc, char **argv, const boost::program_options::options_description &options,
                        const boost::program_options::positional_options_description &positional);
+
+/** \brief Progress of long work on standard error: a line updated in place on a
+  * terminal, a line per tenth of the work otherwise (logs stay short). */
+class Progress
+{
+public:
+  Progress (std::string what, std::size_t total);
+  void step (std::size_t done);
+
+private:
+  std::string what_;
+  std::size_t total_;
+  bool terminal_;
+  std::size_t next_report_ = 0;
+};
 }  // namespace apps
 }  // namespace agex

@@ -1,7 +1,7 @@
 #pragma once
 // The depth pipeline as the apps run it: library stages composed in the order
 // frame -> mixed-pixel removal -> crop box -> median denoise -> floor removal ->
-// surface meshes -> AGEX. Each stage is a PCL or agex class used as a PCL user
+// spur removal -> surface meshes -> AGEX. Each stage is a PCL or agex class used as a PCL user
 // would; this file only wires them together and times them.
 
 #include <agex/common/frame_io.h>
@@ -44,8 +44,12 @@ struct PipelineParams
   float floor_max_tilt_deg = 25.f;
   float floor_distance = 0.04f;
   int floor_min_inliers = 200;
+  // Spurs and ragged edges (agex::SpurFilter).
+  int spur_min_connected = 6;
+  int spur_iterations = -1;  ///< negative: auto, spur_depth over the median point spacing
+  float spur_depth = 0.035f;
   // Surface meshes (agex::SurfaceSegmentation) and AGEX (agex::AGEXKeypoint).
-  float delta_connected = 0.05f;
+  float delta_connected = 0.03f;
   int min_mesh_size = -1;  ///< points; negative: 0.1% of the frame's pixels
   int k = 5;
   float delta_orient = 0.10f;
@@ -61,6 +65,7 @@ struct PipelineResult
   bool floor_found = false;
   Eigen::Vector4f floor_plane = Eigen::Vector4f::Zero ();
   int mixed_pixels_removed = 0;
+  int spur_iterations = 0;  ///< erosion passes actually run
 };
 
 /** Runs the pipeline on an organized cloud. Never throws on empty or all-NaN input. */

@@ -34,5 +34,26 @@ cv::Mat renderOverlay (const pcl::PointCloud<pcl::PointXYZ> &frame,
 
 /** Colour (BGR) for a 1-based rank, shared by the overlay and its legend. */
 cv::Scalar rankColour (int rank);
+
+/** A line plot: named series of (x, y) points on fixed axes. */
+struct Plot
+{
+  struct Series
+  {
+    std::string name;
+    cv::Scalar colour;
+    std::vector<cv::Point2d> points;
+  };
+  std::string title, x_label, y_label;
+  double x_min = 0, x_max = 1, y_min = 0, y_max = 1;
+  double x_tick = 0.1, y_tick = 0.1;
+  std::vector<Series> series;
+};
+
+/** Renders a plot (white background, grid, axes with tick labels, legend) as BGR. */
+cv::Mat renderPlot (const Plot &plot, int width = 720, int height = 480);
+
+/** Colour (BGR) of a body-part class in plots: head red, hand green, foot blue. */
+cv::Scalar bodyPartColour (int part);
 }  // namespace apps
 }  // namespace agex

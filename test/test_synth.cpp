@@ -1,0 +1,780 @@
+// Synthetic frames (agex_synth): BVH parsing and forward kinematics against hand
+// computed poses, real CMU clips of human size in both unit conventions, labels that
+// project onto the rendered body, byte-identical datasets for a seed, the two sensor
+// models (mixed pixels, noise growing with depth, disparity quantisation, edge holes)
+// and bad BVH input.
+
+#include "test_support.h"
+
+#include <agex/common/bvh.h>
+#include <agex/common/dataset.h>
+#include <agex/common/synthetic_scene.h>
+
+#include <fstream>
+#include <functional>
+#include <map>
+#include <memory>
+#include <set>
+#include <sstream>
+#include <tuple>
+
+namespace agex
+{
+/** Test names and messages show the sensor by name. */
+inline void
+PrintTo (SynthSensor sensor, std::ostream *out)
+{
+  *out << synthSensorName (sensor);
+}
+}  // namespace agex
+
+namespace
+{
+using namespace agex_test;
+
+std::string
+readAll (const std::string &path)
+{
+  std::ifstream in (path, std::ios::binary);
+  std::stringstream s;
+  s << in.rdbuf ();
+  return s.str ();
+}
+
+void
+writeAll (const std::string &path, const std::string &bytes)
+{
+  std::ofstream out (path, std::ios::binary | std::ios::trunc);
+  out.write (bytes.data (), static_cast<std::streamsize> (bytes.size ()));
+}
+
+// A three-joint chain with a different rotation order on each joint.
+const char *kChain = R"(HIERARCHY
+ROOT Root
+{
+	OFFSET 0 0 0
+	CHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation
+	JOINT Mid
+	{
+		OFFSET 0 2 0
+		CHANNELS 3 Xrotation Yrotation Zrotation
+		JOINT Tip
+		{
+			OFFSET 1 0 0
+			CHANNELS 3 Yrotation Xrotation Zrotation
+			End Site
+			{
+				OFFSET 0 0 3
+			}
+		}
+	}
+}
+MOTION
+Frames: 3
+Frame Time: 0.1
+0 0 0 0 0 0 0 0 0 0 0 0
+1 2 3 90 90 0 0 0 0 0 0 0
+0 0 0 0 0 0 90 90 0 0 0 0
+)";
+
+void
+expectNear (const Eigen::Vector3d &actual, const Eigen::Vector3d &expected, const std::string &what)
+{
+  EXPECT_LT ((actual - expected).norm (), 1e-9) << what << ": got " << actual.transpose () << ", expected "
+                                                << expected.transpose ();
+}
+
+/** Runs f, expecting an agex::BvhError whose message contains every needle. */
+template <typename F>
+void
+expectBvhError (F &&f, const std::vector<std::string> &needles)
+{
+  try
+  {
+    f ();
+    ADD_FAILURE () << "no agex::BvhError thrown";
+  }
+  catch (const agex::BvhError &e)
+  {
+    const std::string message = e.what ();
+    for (const auto &needle : needles)
+      EXPECT_NE (message.find (needle), std::string::npos) << "'" << needle << "' not in: " << message;
+  }
+  catch (const std::exception &e)
+  {
+    ADD_FAILURE () << "expected agex::BvhError, got another exception: " << e.what ();
+  }
+}
+
+const std::vector<std::string> kMocap = {"cmu_131_01.bvh", "cmu_131_02.bvh", "cmu_131_03.bvh", "cmu_02_01.bvh",
+                                         "cmu_05_06.bvh"};
+
+#define AGEX_REQUIRE_MOCAP(path) AGEX_REQUIRE_SHARED_FILE (path, "the CMU motion capture (../shared/data/mocap)")
+
+/** Generators shared by the rendering tests (loading the clips costs ~0.1 s). */
+const agex::SynthGenerator &
+generator (agex::SynthSensor sensor)
+{
+  static std::map<int, std::unique_ptr<agex::SynthGenerator>> cache;
+  auto &g = cache[static_cast<int> (sensor)];
+  if (!g)
+  {
+    agex::SynthOptions options;
+    options.motion_files = {sharedData ("mocap/cmu_131_01.bvh"), sharedData ("mocap/cmu_02_01.bvh")};
+    options.sensor = sensor;
+    options.seed = 11;
+    g = std::make_unique<agex::SynthGenerator> (options);
+  }
+  return *g;
+}
+
+// ---------------------------------------------------------------------------
+// BVH
+
+TEST (SynthBvh, ForwardKinematicsOfAHandMadeChain)
+{
+  const agex::BvhMotion m = agex::BvhMotion::parse (kChain, "chain.bvh");
+  ASSERT_EQ (m.joints ().size (), 4u);
+  EXPECT_EQ (m.channelCount (), 12);
+  EXPECT_EQ (m.frameCount (), 3);
+  EXPECT_DOUBLE_EQ (m.frameTime (), 0.1);
+  EXPECT_EQ (m.findJoint ("Tip"), 2);
+  EXPECT_EQ (m.findJoint ("tip"), 2);
+  EXPECT_EQ (m.findJoint ("Nope"), -1);
+  EXPECT_TRUE (m.joints ()[3].end_site);
+  EXPECT_EQ (m.joints ()[3].parent, 2);
+  EXPECT_EQ (m.joints ()[2].first_channel, 9);
+  EXPECT_EQ (m.joints ()[1].channels[0], agex::BvhChannel::Xrotation);
+  EXPECT_DOUBLE_EQ (m.restHeight (), 2.0);
+
+  std::vector<Eigen::Isometry3d> g;
+  // Frame 0 is the rest pose: offsets accumulate.
+  m.pose (0, 1.0, g);
+  expectNear (g[1].translation (), {0, 2, 0}, "rest Mid");
+  expectNear (g[2].translation (), {1, 2, 0}, "rest Tip");
+  expectNear (g[3].translation (), {1, 2, 3}, "rest End Site");
+  // Frame 1: root at (1,2,3), R = Rz(90) Rx(90) (file order). Rx(90) takes y to z,
+  // z to -y; Rz(90) takes x to y, y to -x.
+  m.pose (1, 1.0, g);
+  expectNear (g[0].translation (), {1, 2, 3}, "root position");
+  expectNear (g[1].translation (), {1, 2, 5}, "Mid = root + Rz Rx (0,2,0)");
+  expectNear (g[2].translation (), {1, 3, 5}, "Tip = Mid + Rz Rx (1,0,0)");
+  expectNear (g[3].translation (), {4, 3, 5}, "End = Tip + Rz Rx (0,0,3)");
+  // Frame 2: Mid rotated Rx(90) Ry(90): Ry(90) takes x to -z, z to x.
+  m.pose (2, 1.0, g);
+  expectNear (g[2].translation (), {0, 3, 0}, "Tip = Mid + Rx Ry (1,0,0)");
+  expectNear (g[3].translation (), {3, 3, 0}, "End = Tip + Rx Ry (0,0,3)");
+  // The scale multiplies offsets and positions, not angles.
+  m.pose (1, 0.5, g);
+  expectNear (g[3].translation (), {2, 1.5, 2.5}, "scaled End Site");
+  EXPECT_THROW (m.pose (3, 1.0, g), std::out_of_range);
+}
+
+TEST (SynthBvh, AutoScaleByRestHeight)
+{
+  std::string big = kChain;
+  big.replace (big.find ("OFFSET 0 2 0"), 12, "OFFSET 0 20 0");  // 20 units tall: CMU units
+  EXPECT_DOUBLE_EQ (agex::autoBvhScale (agex::BvhMotion::parse (kChain, "a.bvh")), 1.0);
+  EXPECT_DOUBLE_EQ (agex::autoBvhScale (agex::BvhMotion::parse (big, "b.bvh")), agex::kCmuBvhUnit);
+  big.replace (big.find ("OFFSET 0 20 0"), 13, "OFFSET 0 170 0");
+  EXPECT_DOUBLE_EQ (agex::autoBvhScale (agex::BvhMotion::parse (big, "c.bvh")), 0.01);
+}
+
+TEST (SynthBvh, RealClipsAreHumanSizedInBothUnitConventions)
+{
+  for (const auto &name : kMocap)
+  {
+    const std::string path = sharedData ("mocap/" + name);
+    AGEX_REQUIRE_MOCAP (path);
+    const agex::MotionClip clip = agex::MotionClip::load (path);
+    const bool cmu_units = name.rfind ("cmu_131", 0) != 0;
+    EXPECT_DOUBLE_EQ (clip.scale, cmu_units ? agex::kCmuBvhUnit : 1.0) << name;
+    EXPECT_EQ (clip.sequence, name.substr (0, name.size () - 4));
+    EXPECT_GT (clip.motion.frameCount (), 300) << name;
+    // Standing height of the body model in the rest pose, and of the skeleton.
+    const double height = agex::restStandingHeight (clip);
+    EXPECT_GT (height, 1.4) << name;
+    EXPECT_LT (height, 2.1) << name;
+    const double skeleton = clip.motion.restHeight () * clip.scale;
+    EXPECT_GT (skeleton, 1.2) << name;
+    EXPECT_LT (skeleton, 2.0) << name;
+    // Posed frames: the head 0.5-2.0 m above the lower ankle (1.2 m or more when
+    // standing: some clips crouch), the hands within arm's reach of the neck, the
+    // limbs keep their lengths.
+    std::vector<Eigen::Isometry3d> g;
+    const agex::SkeletonMap &m = clip.map;
+    double thigh0 = -1, tallest = 0;
+    for (int f = 0; f < clip.motion.frameCount (); f += 37)
+    {
+      clip.motion.pose (f, clip.scale, g);
+      auto P = [&] (int j) { return g[j].translation (); };
+      const double head_above = P (m.head).y () - std::min (P (m.ankle[0]).y (), P (m.ankle[1]).y ());
+      tallest = std::max (tallest, head_above);
+      EXPECT_GT (head_above, 0.5) << name << " frame " << f;
+      EXPECT_LT (head_above, 2.0) << name << " frame " << f;
+      for (int s = 0; s < 2; ++s)
+        EXPECT_LT ((P (m.wrist[s]) - P (m.neck)).norm (), 0.9) << name << " frame " << f;
+      const double thigh = (P (m.knee[0]) - P (m.hip[0])).norm ();
+      if (thigh0 < 0)
+        thigh0 = thigh;
+      EXPECT_NEAR (thigh, thigh0, 1e-9);
+      EXPECT_GT (thigh, 0.3);
+      EXPECT_LT (thigh, 0.55);
+    }
+    EXPECT_GT (tallest, 1.2) << name;
+  }
+  // An explicit scale gives the same as auto for a CMU-unit file.
+  const std::string path = sharedData ("mocap/cmu_02_01.bvh");
+  AGEX_REQUIRE_MOCAP (path);
+  EXPECT_NEAR (agex::restStandingHeight (agex::MotionClip::load (path, agex::kCmuBvhUnit)),
+               agex::restStandingHeight (agex::MotionClip::load (path)), 1e-12);
+}
+
+TEST (SynthBvh, BadInputNamesTheFileAndLine)
+{
+  TempDir dir;
+  expectBvhError ([&] { agex::BvhMotion::read (dir.file ("missing.bvh")); }, {dir.file ("missing.bvh"), "cannot open"});
+  expectBvhError ([&] { agex::MotionClip::load (dir.file ("missing.bvh")); }, {dir.file ("missing.bvh")});
+
+  const std::string chain = kChain;
+  auto parseFile = [&] (const std::string &name, const std::string &text) {
+    writeAll (dir.file (name), text);
+    return [&dir, name] { agex::BvhMotion::read (dir.file (name)); };
+  };
+  // Truncated inside the HIERARCHY (file ends in Tip's block).
+  expectBvhError (parseFile ("cut.bvh", chain.substr (0, chain.find ("End Site"))),
+                  {dir.file ("cut.bvh") + ":13:", "truncated"});
+  // Truncated MOTION: a frame missing.
+  expectBvhError (parseFile ("short.bvh", chain.substr (0, chain.rfind ("0 0 0 0 0 0 90"))),
+                  {dir.file ("short.bvh"), "2 of 3 frames", "truncated"});
+  // No MOTION at all.
+  expectBvhError (parseFile ("nomotion.bvh", chain.substr (0, chain.find ("MOTION"))),
+                  {dir.file ("nomotion.bvh"), "no MOTION"});
+  // CHANNELS 6 with five names: line 5.
+  {
+    std::string bad = chain;
+    bad.replace (bad.find (" Yrotation\n"), 10, "");
+    expectBvhError (parseFile ("channels.bvh", bad), {dir.file ("channels.bvh") + ":6:", "CHANNELS 6", "lists 5"});
+  }
+  // CHANNELS 3 with four names.
+  {
+    std::string bad = chain;
+    bad.replace (bad.find ("Xrotation Yrotation Zrotation"), 29, "Xrotation Yrotation Zrotation Xposition");
+    expectBvhError (parseFile ("extra.bvh", bad), {dir.file ("extra.bvh") + ":9:", "more channel names"});
+  }
+  // A frame with the wrong number of values (line 25: the second frame).
+  {
+    std::string bad = chain;
+    bad.replace (bad.find ("1 2 3 90 90 0 0 0 0 0 0 0"), 25, "1 2 3 90 90 0 0 0 0 0 0");
+    expectBvhError (parseFile ("values.bvh", bad), {dir.file ("values.bvh") + ":25:", "11 values", "12 channels"});
+  }
+  // Not a number.
+  {
+    std::string bad = chain;
+    bad.replace (bad.find ("OFFSET 1 0 0"), 12, "OFFSET 1 x 0");
+    expectBvhError (parseFile ("nan.bvh", bad), {dir.file ("nan.bvh") + ":12:", "'x'"});
+  }
+  expectBvhError (parseFile ("empty.bvh", ""), {dir.file ("empty.bvh") + ":1:", "empty"});
+  expectBvhError (parseFile ("text.bvh", "hello world\n"), {dir.file ("text.bvh") + ":1:", "HIERARCHY"});
+  // A valid BVH without a human skeleton: the body model names what is missing.
+  writeAll (dir.file ("chain.bvh"), chain);
+  expectBvhError ([&] { agex::MotionClip::load (dir.file ("chain.bvh")); }, {dir.file ("chain.bvh"), "Head"});
+
+  // Every truncation of a valid file parses or throws BvhError; nothing else.
+  for (std::size_t n = 0; n < chain.size (); ++n)
+  {
+    try
+    {
+      agex::BvhMotion::parse (chain.substr (0, n), "cut.bvh");
+    }
+    catch (const agex::BvhError &)
+    {
+    }
+    catch (const std::exception &e)
+    {
+      ADD_FAILURE () << "truncation at " << n << " threw a non-BvhError: " << e.what ();
+    }
+  }
+}
+
+// ---------------------------------------------------------------------------
+// Random numbers
+
+TEST (SynthRng, DeterministicUniformAndNormal)
+{
+  // std::mt19937_64 is fully specified: its 10000th output for the default seed.
+  agex::SynthRng standard (5489u);
+  for (int i = 0; i < 9999; ++i)
+    standard.raw ();
+  EXPECT_EQ (standard.raw (), 9981545732273789042ull);
+
+  agex::SynthRng a = agex::SynthRng::forItem (3, 7), b = agex::SynthRng::forItem (3, 7), c = agex::SynthRng::forItem (3, 8);
+  double sum = 0, sum2 = 0, lo = 1, hi = 0;
+  const int n = 100000;
+  bool differs = false;
+  for (int i = 0; i < n; ++i)
+  {
+    const double x = a.normal ();
+    ASSERT_EQ (x, b.normal ());
+    differs = differs || x != c.normal ();
+    sum += x;
+    sum2 += x * x;
+    const double u = a.uniform ();
+    b.uniform ();
+    c.uniform ();
+    lo = std::min (lo, u);
+    hi = std::max (hi, u);
+  }
+  EXPECT_TRUE (differs);
+  EXPECT_NEAR (sum / n, 0.0, 0.02);
+  EXPECT_NEAR (sum2 / n, 1.0, 0.02);
+  EXPECT_GE (lo, 0.0);
+  EXPECT_LT (hi, 1.0);
+}
+
+// ---------------------------------------------------------------------------
+// Rendering and labels
+
+class SynthSensors : public ::testing::TestWithParam<agex::SynthSensor>
+{
+};
+
+TEST_P (SynthSensors, LabelsProjectOntoTheRenderedBody)
+{
+  AGEX_REQUIRE_MOCAP (sharedData ("mocap/cmu_131_01.bvh"));
+  AGEX_REQUIRE_MOCAP (sharedData ("mocap/cmu_02_01.bvh"));
+  const agex::SynthGenerator &gen = generator (GetParam ());
+  const agex::SensorModel &sensor = gen.sensor ();
+  const agex::CameraIntrinsics &k = sensor.intrinsics;
+  const int frames = GetParam () == agex::SynthSensor::Kinect ? 6 : 16;
+  const int win = agex::labelWindow (sensor);
+  int labels = 0, visible = 0;
+  for (int f = 0; f < frames; ++f)
+  {
+    const agex::SynthFrame frame = gen.render (static_cast<std::uint64_t> (f));
+    ASSERT_EQ (frame.labels.size (), 5u);
+    ASSERT_EQ (frame.label_checks.size (), 5u);
+    EXPECT_EQ (static_cast<int> (frame.cloud.width), sensor.width);
+    EXPECT_EQ (static_cast<int> (frame.cloud.height), sensor.height);
+    EXPECT_EQ (frame.labels[1].part, agex::BodyPart::Hand);
+    EXPECT_LE (frame.labels[1].tip_px.x (), frame.labels[2].tip_px.x ()) << "hand 0 is on the image's left";
+    EXPECT_LE (frame.labels[3].tip_px.x (), frame.labels[4].tip_px.x ()) << "foot 0 is on the image's left";
+    for (std::size_t j = 0; j < frame.labels.size (); ++j)
+    {
+      const agex::PartLabel &l = frame.labels[j];
+      const agex::SynthLabelCheck &check = frame.label_checks[j];
+      const std::string where = "frame " + std::to_string (f) + " " + agex::bodyPartName (l.part) + " " +
+                                std::to_string (l.instance);
+      ++labels;
+      EXPECT_TRUE (l.keyframe);
+      // Tips on the surface of their own part of the body (the person, not the floor
+      // or a wall; a hand may rest inside another part, a thigh say).
+      const Eigen::Vector3d tip = l.tip.cast<double> ();
+      double own = std::numeric_limits<double>::infinity ();
+      for (const int p : check.primitives)
+        own = std::min (own, std::abs (frame.scene.primitives.at (static_cast<std::size_t> (p)).distance (tip)));
+      ASSERT_FALSE (check.primitives.empty ());
+      EXPECT_EQ (frame.scene.primitives[static_cast<std::size_t> (check.primitives[0])].object,
+                 agex::SynthObject::Person);
+      EXPECT_LT (own, 0.002) << where;
+      EXPECT_LT (frame.scene.distance (tip, agex::SynthObject::Person), 0.002) << where;
+      EXPECT_GT (frame.scene.distance (tip, agex::SynthObject::Wall), 0.02) << where;
+      EXPECT_LT ((l.tip - l.base).norm (), 0.35f) << where;
+      EXPECT_GT ((l.tip - l.base).norm (), 0.08f) << where;
+      // Pixels are the projections with the dataset intrinsics.
+      EXPECT_NEAR (l.tip_px.x (), k.fx * l.tip.x () / l.tip.z () + k.cx, 1e-2) << where;
+      EXPECT_NEAR (l.tip_px.y (), k.fy * l.tip.y () / l.tip.z () + k.cy, 1e-2) << where;
+      EXPECT_NEAR (l.base_px.x (), k.fx * l.base.x () / l.base.z () + k.cx, 1e-2) << where;
+      EXPECT_LE (check.tolerance, l.part == agex::BodyPart::Head ? 0.15 : 0.08) << where;
+      if (!l.visible)
+        continue;
+      ++visible;
+      const long u = std::lround (l.tip_px.x ()), v = std::lround (l.tip_px.y ());
+      ASSERT_TRUE (u >= 0 && v >= 0 && u < sensor.width && v < sensor.height) << where;
+      // A valid depth near the tip pixel close to the tip's depth, seeing the tip's own part.
+      double best = std::numeric_limits<double>::infinity ();
+      for (long vv = std::max (0L, v - win); vv <= std::min<long> (sensor.height - 1, v + win); ++vv)
+        for (long uu = std::max (0L, u - win); uu <= std::min<long> (sensor.width - 1, u + win); ++uu)
+        {
+          const std::size_t i = static_cast<std::size_t> (vv) * sensor.width + uu;
+          const pcl::PointXYZ &p = frame.cloud.points[i];
+          const bool own = std::find (check.primitives.begin (), check.primitives.end (), frame.primitive[i]) !=
+                           check.primitives.end ();
+          if (isFinite (p) && own && frame.object[i] == agex::SynthObject::Person)
+            best = std::min (best, static_cast<double> (std::abs (p.z - l.tip.z ())));
+        }
+      EXPECT_LT (best, check.tolerance) << where;
+    }
+  }
+  // Most tips are seen (some leave the frame or hide behind the body).
+  EXPECT_GT (visible, labels / 2) << visible << " of " << labels << " visible";
+}
+
+TEST_P (SynthSensors, RendersAPersonInARoom)
+{
+  AGEX_REQUIRE_MOCAP (sharedData ("mocap/cmu_131_01.bvh"));
+  AGEX_REQUIRE_MOCAP (sharedData ("mocap/cmu_02_01.bvh"));
+  const agex::SynthGenerator &gen = generator (GetParam ());
+  std::set<std::string> sequences;
+  for (int f = 0; f < 6; ++f)
+  {
+    const agex::SynthFrame frame = gen.render (static_cast<std::uint64_t> (f));
+    sequences.insert (frame.sequence);
+    std::size_t person = 0, floor = 0, valid = 0;
+    for (std::size_t i = 0; i < frame.object.size (); ++i)
+    {
+      person += frame.object[i] == agex::SynthObject::Person;
+      floor += frame.object[i] == agex::SynthObject::Floor;
+      valid += isFinite (frame.cloud.points[i]);
+    }
+    EXPECT_GT (person, frame.object.size () / 50) << "frame " << f;
+    EXPECT_GT (floor, 0u) << "frame " << f;
+    EXPECT_GT (valid, frame.object.size () / 4) << "frame " << f;
+    // Organized, camera frame: x = (u - cx) z / fx.
+    const agex::CameraIntrinsics &k = gen.sensor ().intrinsics;
+    for (int v = 0; v < gen.sensor ().height; v += 7)
+      for (int u = 0; u < gen.sensor ().width; u += 7)
+      {
+        const pcl::PointXYZ &p = frame.cloud (u, v);
+        if (!isFinite (p))
+          continue;
+        EXPECT_NEAR (p.x, (u - k.cx) * p.z / k.fx, 1e-4);
+        EXPECT_NEAR (p.y, (v - k.cy) * p.z / k.fy, 1e-4);
+        EXPECT_GT (p.z, 0.09f);
+      }
+  }
+  EXPECT_EQ (sequences.size (), 2u) << "frames come from both clips";
+}
+
+INSTANTIATE_TEST_SUITE_P (Synth, SynthSensors, ::testing::Values (agex::SynthSensor::Sr4000, agex::SynthSensor::Kinect),
+                          [] (const ::testing::TestParamInfo<agex::SynthSensor> &info) {
+                            return std::string (agex::synthSensorName (info.param));
+                          });
+
+TEST (SynthSr4000, MixedPixelsAtSilhouettesAndNoiseGrowingWithDepth)
+{
+  AGEX_REQUIRE_MOCAP (sharedData ("mocap/cmu_131_01.bvh"));
+  AGEX_REQUIRE_MOCAP (sharedData ("mocap/cmu_02_01.bvh"));
+  const agex::SynthGenerator &gen = generator (agex::SynthSensor::Sr4000);
+  EXPECT_EQ (gen.sensor ().width, 144);
+  EXPECT_EQ (gen.sensor ().height, 176);
+  std::size_t mixed = 0, between_neighbours = 0;
+  double near_sum2 = 0, far_sum2 = 0;
+  std::size_t near_n = 0, far_n = 0;
+  for (int f = 0; f < 6; ++f)
+  {
+    const agex::SynthFrame frame = gen.render (static_cast<std::uint64_t> (f));
+    const int w = gen.sensor ().width, h = gen.sensor ().height;
+    for (int v = 1; v + 1 < h; ++v)
+      for (int u = 1; u + 1 < w; ++u)
+      {
+        const std::size_t i = static_cast<std::size_t> (v) * w + u;
+        const float z = frame.cloud.points[i].z;
+        if (!std::isfinite (z))
+          continue;
+        const float lo = frame.sample_min_z[i], hi = frame.sample_max_z[i];
+        // A silhouette pixel (its samples see near and far) measured between them.
+        if (hi - lo > 0.3f && z > lo + 0.05f && z < hi - 0.05f)
+          ++mixed;
+        // The same from the data alone: a pixel 15 cm behind one neighbour and in front of another.
+        bool front = false, back = false;
+        for (int dv = -1; dv <= 1; ++dv)
+          for (int du = -1; du <= 1; ++du)
+          {
+            const float zn = frame.cloud (u + du, v + dv).z;
+            front = front || zn < z - 0.15f;
+            back = back || zn > z + 0.15f;
+          }
+        between_neighbours += front && back;
+        // Noise on flat interior pixels, near and far.
+        if (hi - lo < 0.005f && std::isfinite (frame.ideal_z[i]))
+        {
+          const double e = z - frame.ideal_z[i];
+          if (frame.ideal_z[i] < 2.0f)
+          {
+            near_sum2 += e * e;
+            ++near_n;
+          }
+          else if (frame.ideal_z[i] > 3.5f)
+          {
+            far_sum2 += e * e;
+            ++far_n;
+          }
+        }
+      }
+  }
+  EXPECT_GT (mixed, 50u);
+  EXPECT_GT (between_neighbours, 20u);
+  ASSERT_GT (near_n, 100u);
+  ASSERT_GT (far_n, 100u);
+  const double near_sigma = std::sqrt (near_sum2 / near_n), far_sigma = std::sqrt (far_sum2 / far_n);
+  EXPECT_GT (near_sigma, 0.001);
+  EXPECT_LT (near_sigma, 0.02);
+  EXPECT_GT (far_sigma, 1.5 * near_sigma) << "noise grows with depth";
+}
+
+TEST (SynthKinect, VgaWithQuantisedDepthEdgeHolesAndNoMixedPixels)
+{
+  AGEX_REQUIRE_MOCAP (sharedData ("mocap/cmu_131_01.bvh"));
+  AGEX_REQUIRE_MOCAP (sharedData ("mocap/cmu_02_01.bvh"));
+  const agex::SynthGenerator &gen = generator (agex::SynthSensor::Kinect);
+  const agex::SensorModel &s = gen.sensor ();
+  EXPECT_EQ (s.width, 640);
+  EXPECT_EQ (s.height, 480);
+  EXPECT_EQ (s.intrinsics.fx, 525.0);
+  EXPECT_EQ (s.intrinsics.fy, 525.0);
+  EXPECT_EQ (s.intrinsics.cx, 319.5);
+  EXPECT_EQ (s.intrinsics.cy, 239.5);
+  const double fb8 = 8.0 * s.kinect_f_ir * s.kinect_baseline;
+  std::size_t edge_pixels = 0, edge_holes = 0, inner_pixels = 0, inner_holes = 0, off = 0, unquantised = 0, valid = 0;
+  for (int f = 0; f < 3; ++f)
+  {
+    const agex::SynthFrame frame = gen.render (static_cast<std::uint64_t> (f));
+    const int w = s.width, h = s.height;
+    // Distance (in pixels, up to 4) to a person / not-person boundary.
+    auto nearBoundary = [&] (int u, int v, int r) {
+      const bool here = frame.object[static_cast<std::size_t> (v) * w + u] == agex::SynthObject::Person;
+      for (int dv = -r; dv <= r; ++dv)
+        for (int du = -r; du <= r; ++du)
+        {
+          const int uu = std::clamp (u + du, 0, w - 1), vv = std::clamp (v + dv, 0, h - 1);
+          if ((frame.object[static_cast<std::size_t> (vv) * w + uu] == agex::SynthObject::Person) != here)
+            return true;
+        }
+      return false;
+    };
+    for (int v = 0; v < h; ++v)
+      for (int u = 0; u < w; ++u)
+      {
+        const std::size_t i = static_cast<std::size_t> (v) * w + u;
+        const float ideal = frame.ideal_z[i];
+        const float z = frame.cloud.points[i].z;
+        if (!std::isfinite (ideal) || ideal > 4.5f)
+          continue;
+        if (std::isfinite (z))
+        {
+          ++valid;
+          // No mixed pixels: every depth is the surface's own, within the quantisation
+          // and noise of its disparity.
+          if (std::abs (z - ideal) > 0.05 + 0.01 * ideal * ideal)
+            ++off;
+          // Disparity quantisation: 8 f b / z is an integer.
+          const double q = fb8 / z;
+          if (std::abs (q - std::round (q)) > 1e-3)
+            ++unquantised;
+        }
+        if (nearBoundary (u, v, 1))
+        {
+          ++edge_pixels;
+          edge_holes += !std::isfinite (z);
+        }
+        else if (!nearBoundary (u, v, 4) && frame.object[i] == agex::SynthObject::Person)
+        {
+          ++inner_pixels;
+          inner_holes += !std::isfinite (z);
+        }
+      }
+  }
+  ASSERT_GT (valid, 100000u);
+  EXPECT_EQ (off, 0u) << "pixels far from their surface (mixed)";
+  EXPECT_EQ (unquantised, 0u);
+  ASSERT_GT (edge_pixels, 500u);
+  ASSERT_GT (inner_pixels, 5000u);
+  EXPECT_GT (static_cast<double> (edge_holes) / edge_pixels, 0.25) << "holes along depth edges";
+  EXPECT_LT (static_cast<double> (inner_holes) / inner_pixels, 0.05) << "few holes inside the body";
+}
+
+// ---------------------------------------------------------------------------
+// A hand-built human skeleton (bvh11 names, metres): rendering without the shared data
+
+/** A standing person, arms down, facing +z; frame 1 raises the left arm sideways. */
+std::string
+humanBvh ()
+{
+  struct J
+  {
+    std::string name;
+    double x, y, z;
+    std::vector<J> children;
+  };
+  auto chain = [] (std::vector<std::tuple<std::string, double, double, double>> joints, double ex, double ey, double ez) {
+    J end{"End Site", ex, ey, ez, {}};
+    for (auto it = joints.rbegin (); it != joints.rend (); ++it)
+      end = J{std::get<0> (*it), std::get<1> (*it), std::get<2> (*it), std::get<3> (*it), {end}};
+    return end;
+  };
+  J root{"Hips", 0, 0.95, 0, {}};
+  for (const double s : {1.0, -1.0})
+  {
+    const std::string side = s > 0 ? "Left" : "Right";
+    root.children.push_back (chain ({{side + "Hip", 0.09 * s, -0.08, 0}, {side + "Knee", 0, -0.42, 0},
+                                     {side + "Ankle", 0, -0.4, 0}, {side + "Toe", 0, -0.04, 0.12}},
+                                    0, 0, 0.06));
+  }
+  J spine = chain ({{"lowerback", 0, 0, 0}, {"Chest", 0, 0.12, 0}, {"Chest2", 0, 0.12, 0}, {"lowerneck", 0, 0.1, 0},
+                    {"Neck", 0, 0.08, 0}, {"Head", 0, 0.08, 0}},
+                   0, 0.1, 0);
+  J *chest2 = &spine.children[0].children[0];
+  for (const double s : {1.0, -1.0})
+  {
+    const std::string side = s > 0 ? "Left" : "Right";
+    chest2->children.push_back (chain ({{side + "Shoulder", 0.18 * s, 0.08, 0}, {side + "Elbow", 0, -0.28, 0},
+                                        {side + "Wrist", 0, -0.25, 0}},
+                                       0, -0.08, 0));
+  }
+  root.children.push_back (spine);
+
+  std::ostringstream out;
+  int channels = 0, left_shoulder = -1;
+  std::function<void (const J &, int, bool)> write = [&] (const J &j, int depth, bool is_root) {
+    const std::string tab (static_cast<std::size_t> (depth), '\t');
+    if (j.name == "End Site")
+      out << tab << "End Site\n";
+    else
+      out << tab << (is_root ? "ROOT " : "JOINT ") << j.name << "\n";
+    out << tab << "{\n" << tab << "\tOFFSET " << j.x << " " << j.y << " " << j.z << "\n";
+    if (j.name != "End Site")
+    {
+      if (j.name == "LeftShoulder")
+        left_shoulder = channels;
+      out << tab << "\tCHANNELS " << (is_root ? "6 Xposition Yposition Zposition " : "3 ")
+          << "Zrotation Yrotation Xrotation\n";
+      channels += is_root ? 6 : 3;
+    }
+    for (const auto &c : j.children)
+      write (c, depth + 1, false);
+    out << tab << "}\n";
+  };
+  out << "HIERARCHY\n";
+  write (root, 0, true);
+  out << "MOTION\nFrames: 2\nFrame Time: 0.0083333\n";
+  for (int f = 0; f < 2; ++f)
+  {
+    for (int c = 0; c < channels; ++c)
+      out << (c ? " " : "") << (c == 1 ? 0.95 : (f == 1 && c == left_shoulder) ? 150.0 : 0.0);
+    out << "\n";
+  }
+  return out.str ();
+}
+
+TEST (SynthRender, HandBuiltSkeletonWithoutTheSharedData)
+{
+  QuietPcl quiet;
+  TempDir dir;
+  writeAll (dir.file ("person.bvh"), humanBvh ());
+  const agex::MotionClip clip = agex::MotionClip::load (dir.file ("person.bvh"));
+  EXPECT_EQ (clip.scale, 1.0);
+  EXPECT_EQ (clip.sequence, "person");
+  EXPECT_NEAR (agex::restStandingHeight (clip), 1.72, 0.08);
+  // Frame 1 raises the left hand above the shoulder.
+  const agex::BodyModel rest = agex::buildBody (clip, 0, agex::BodyParams ()),
+                        raised = agex::buildBody (clip, 1, agex::BodyParams ());
+  EXPECT_LT (rest.tip[1].y (), 0.9);
+  EXPECT_GT (raised.tip[1].y (), 1.5);
+  EXPECT_NEAR (raised.tip[2].y (), rest.tip[2].y (), 1e-9) << "the right hand stays";
+
+  for (const agex::SynthSensor sensor : {agex::SynthSensor::Sr4000, agex::SynthSensor::Kinect})
+  {
+    agex::SynthOptions options;
+    options.motion_files = {dir.file ("person.bvh")};
+    options.sensor = sensor;
+    options.seed = 3;
+    options.min_distance = 2.6;  // the whole person in the frame
+    options.max_distance = 3.2;
+    const agex::SynthGenerator gen (options);
+    int visible_heads = 0;
+    for (int f = 0; f < 3; ++f)
+    {
+      const agex::SynthFrame a = gen.render (static_cast<std::uint64_t> (f)), b = gen.render (static_cast<std::uint64_t> (f));
+      ASSERT_EQ (a.cloud.size (), b.cloud.size ());
+      for (std::size_t i = 0; i < a.cloud.size (); ++i)
+        ASSERT_EQ (bits (a.cloud.points[i].z), bits (b.cloud.points[i].z)) << "render is not deterministic";
+      std::size_t person = 0;
+      for (const auto o : a.object)
+        person += o == agex::SynthObject::Person;
+      EXPECT_GT (person, a.object.size () / 40);
+      visible_heads += a.labels[0].visible;
+      for (std::size_t j = 0; j < a.labels.size (); ++j)
+        if (a.labels[j].visible)
+        {
+          const long u = std::lround (a.labels[j].tip_px.x ()), v = std::lround (a.labels[j].tip_px.y ());
+          EXPECT_TRUE (u >= 0 && v >= 0 && u < gen.sensor ().width && v < gen.sensor ().height);
+        }
+    }
+    EXPECT_GE (visible_heads, 2) << agex::synthSensorName (sensor);
+  }
+}
+
+// ---------------------------------------------------------------------------
+// Datasets
+
+std::map<std::string, std::string>
+filesOf (const fs::path &root)
+{
+  std::map<std::string, std::string> files;
+  for (const auto &entry : fs::recursive_directory_iterator (root))
+    if (entry.is_regular_file ())
+      files[fs::relative (entry.path (), root).string ()] = readAll (entry.path ().string ());
+  return files;
+}
+
+TEST (SynthDataset, SameSeedSameBytesDifferentSeedDifferent)
+{
+  AGEX_REQUIRE_MOCAP (sharedData ("mocap/cmu_131_01.bvh"));
+  AGEX_REQUIRE_MOCAP (sharedData ("mocap/cmu_02_01.bvh"));
+  QuietPcl quiet;
+  TempDir dir;
+  auto run = [&] (std::uint64_t seed, const std::string &name, bool overwrite = false) {
+    agex::SynthOptions options;
+    options.motion_files = {sharedData ("mocap/cmu_131_01.bvh"), sharedData ("mocap/cmu_02_01.bvh")};
+    options.seed = seed;
+    const agex::SynthGenerator gen (options);
+    int calls = 0;
+    const agex::SynthRunStats stats =
+        agex::writeSyntheticDataset (gen, 4, dir.file (name), overwrite, [&] (int done, int total) {
+          EXPECT_EQ (done, ++calls);
+          EXPECT_EQ (total, 4);
+        });
+    EXPECT_EQ (stats.frames, 4);
+    EXPECT_EQ (stats.labels, 20);
+    return filesOf (dir.path () / name);
+  };
+  const auto a = run (5, "a"), b = run (5, "b"), c = run (6, "c");
+  ASSERT_EQ (a.size (), 6u);  // dataset.json, labels.csv, 4 frames
+  EXPECT_TRUE (a == b) << "the same seed wrote different bytes";
+  EXPECT_NE (a.at ("labels.csv"), c.at ("labels.csv"));
+  EXPECT_NE (a.at ("frames/000000.pcd"), c.at ("frames/000000.pcd"));
+
+  // The dataset reads back: sensor, intrinsics, sequences, labels.
+  const agex::Dataset ds = agex::Dataset::read (dir.file ("a"));
+  EXPECT_EQ (ds.info ().sensor, "sr4000");
+  EXPECT_EQ (ds.info ().width, 144);
+  EXPECT_EQ (ds.info ().height, 176);
+  EXPECT_EQ (ds.info ().intrinsics.fx, 220.0);
+  EXPECT_NE (ds.info ().provenance.find ("cmu_02_01.bvh"), std::string::npos);
+  EXPECT_NE (ds.info ().provenance.find ("seed 5"), std::string::npos);
+  EXPECT_NE (ds.info ().provenance.find ("girth="), std::string::npos);
+  ASSERT_EQ (ds.frames ().size (), 4u);
+  EXPECT_EQ (ds.frames ()[0].id, "000000");
+  for (const auto &frame : ds.frames ())
+  {
+    EXPECT_TRUE (frame.sequence == "cmu_131_01" || frame.sequence == "cmu_02_01") << frame.sequence;
+    EXPECT_EQ (ds.labelsOf (frame.id).size (), 5u);
+    EXPECT_TRUE (ds.isKeyframe (frame.id));
+    const auto cloud = ds.loadFrame (frame.id);
+    EXPECT_EQ (cloud->width, 144u);
+  }
+
+  // An existing output is refused without overwrite and replaced with it.
+  try
+  {
+    run (5, "a");
+    ADD_FAILURE () << "an existing dataset was overwritten";
+  }
+  catch (const agex::DatasetError &e)
+  {
+    EXPECT_NE (std::string (e.what ()).find ("already exists"), std::string::npos) << e.what ();
+  }
+  EXPECT_TRUE (run (5, "a", true) == b);
+}
+}  // namespace

@@ -47,6 +47,43 @@ struct EIGEN_ALIGN16 InterestPoint
 
   PCL_MAKE_ALIGNED_OPERATOR_NEW
 };
+
+/** \brief A depth patch around an interest point (agex::DepthPatchEstimation).
+  *
+  * patch            kMaxSize x kMaxSize cells, row-major (row = patch y, pointing down
+  *                  along the orientation); a patch of size n < kMaxSize uses the
+  *                  first n * n values (row-major n x n) and leaves the rest 0. Each
+  *                  cell is the depth of the sampled pixel minus the interest point's
+  *                  depth (metres, positive = farther away), clamped to +-clamp;
+  *                  invalid or out-of-frame pixels hold the background value.
+  * orientation      the 3D orientation the patch was aligned with (the patch's +y axis
+  *                  follows its image projection); zero when the patch was not rotated
+  *                  (patch axes = image axes)
+  * size             cells per side (0: no patch computed)
+  * metres_per_cell  cell pitch in metres at the interest point's depth
+  */
+struct DepthPatch
+{
+  static constexpr int kMaxSize = 41;
+  static constexpr int kMaxCells = kMaxSize * kMaxSize;
+
+  float patch[kMaxCells];
+  float orientation[3];
+  std::int32_t size;
+  float metres_per_cell;
+
+  DepthPatch () : patch{}, orientation{0.f, 0.f, 0.f}, size (0), metres_per_cell (0.f) {}
+
+  /** Cell (row, col) of a size x size patch. */
+  float &at (int row, int col) { return patch[row * size + col]; }
+  float at (int row, int col) const { return patch[row * size + col]; }
+
+  Eigen::Map<Eigen::Vector3f> getOrientationVector3fMap () { return Eigen::Map<Eigen::Vector3f> (orientation); }
+  Eigen::Map<const Eigen::Vector3f> getOrientationVector3fMap () const
+  {
+    return Eigen::Map<const Eigen::Vector3f> (orientation);
+  }
+};
 }  // namespace agex
 
 POINT_CLOUD_REGISTER_POINT_STRUCT (agex::InterestPoint,
@@ -59,3 +96,11 @@ POINT_CLOUD_REGISTER_POINT_STRUCT (agex::InterestPoint,
   (std::int32_t, mesh, mesh)
   (std::int32_t, u, u)
   (std::int32_t, v, v))
+
+
+static_assert (agex::DepthPatch::kMaxCells == 1681, "the registered patch field below is float[1681]");
+POINT_CLOUD_REGISTER_POINT_STRUCT (agex::DepthPatch,
+  (float[1681], patch, patch)
+  (float[3], orientation, orientation)
+  (std::int32_t, size, size)
+  (float, metres_per_cell, metres_per_cell))

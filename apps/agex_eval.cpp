@@ -2,15 +2,22 @@
 //   agex_eval coverage --dataset DIR --k K --radius R [--keyframes] --json FILE [--plot FILE.png]
 // coverage: how often each labelled body part is among the first k AGEX points.
 
+#include <agex/apps/body_parts.h>
 #include <agex/apps/command_line.h>
+#include <agex/apps/dataset_selection.h>
 #include <agex/apps/coverage.h>
 #include <agex/apps/depth_pipeline.h>
 #include <agex/apps/output.h>
 #include <agex/common/atomic_file.h>
+#include <agex/classification/patch_classifier.h>
 #include <agex/common/dataset.h>
+
+#include <filesystem>
 
 #include <boost/program_options.hpp>
 
+#include <algorithm>
+#include <chrono>
 #include <iostream>
 
 namespace po = boost::program_options;
@@ -87,6 +94,64 @@ evaluateCoverage (const agex::Dataset &dataset, agex::apps::PipelineParams param
   }
   return 0;
 }
+int
+evaluateDetection (const agex::apps::DatasetSelection &selection, const std::string &model_path, float radius,
+                   const std::string &json_path, const std::string &plots_dir)
+{
+  const agex::PatchClassifier classifier = agex::PatchClassifier::load (model_path);
+  const agex::apps::DetectorSettings settings = agex::apps::DetectorSettings::fromJson (classifier.metadata ());
+  agex::apps::DetectionEvaluation evaluation (radius);
+  agex::apps::Progress progress ("evaluated", selection.frame_ids.size ());
+  std::vector<double> frame_ms;
+  for (std::size_t i = 0; i < selection.frame_ids.size (); ++i)
+  {
+    const auto &id = selection.frame_ids[i];
+    const auto cloud = selection.dataset.loadFrame (id);
+    const auto start = std::chrono::steady_clock::now ();
+    const auto prepared = agex::apps::runDepthPipeline (cloud, settings.pipeline);
+    const auto detections = agex::apps::detectBodyParts (prepared, classifier, settings.patch);
+    frame_ms.push_back (std::chrono::duration<double, std::milli> (std::chrono::steady_clock::now () - start).count ());
+    evaluation.addFrame (detections, selection.dataset.labelsOf (id));
+    progress.step (i + 1);
+  }
+  constexpr float kConfusionThreshold = 0.75f;
+  nlohmann::json doc = evaluation.report (kConfusionThreshold);
+  doc["dataset"] = selection.dataset.directory ();
+  doc["model"] = model_path;
+  std::sort (frame_ms.begin (), frame_ms.end ());
+  doc["ms_per_frame_median"] = frame_ms.empty () ? 0.0 : frame_ms[frame_ms.size () / 2];
+  if (!json_path.empty ())
+    agex::apps::writeJson (json_path, doc);
+  std::cout << selection.dataset.directory () << ": " << selection.frame_ids.size () << " frames\n";
+  for (int c = 0; c < agex::kBodyPartCount; ++c)
+  {
+    const auto part = static_cast<agex::BodyPart> (c);
+    std::printf ("  %-5s AP %.3f, orientation median %.1f deg\n", agex::bodyPartName (part),
+                 evaluation.averagePrecision (part), evaluation.orientationMedianDeg (part));
+  }
+  if (!plots_dir.empty ())
+  {
+    std::filesystem::create_directories (plots_dir);
+    agex::apps::Plot plot;
+    plot.title = "Body-part detection: precision against recall (" + std::to_string (selection.frame_ids.size ()) +
+                 " frames)";
+    plot.x_label = "recall";
+    plot.y_label = "precision";
+    for (int c = 0; c < agex::kBodyPartCount; ++c)
+    {
+      const auto part = static_cast<agex::BodyPart> (c);
+      char name[64];
+      std::snprintf (name, sizeof name, "%s AP %.2f", agex::bodyPartName (part), evaluation.averagePrecision (part));
+      agex::apps::Plot::Series series{name, agex::apps::bodyPartColour (c), {}};
+      for (const auto &[recall, precision] : evaluation.precisionRecall (part))
+        series.points.emplace_back (recall, precision);
+      plot.series.push_back (series);
+    }
+    agex::apps::writePng ((std::filesystem::path (plots_dir) / "precision_recall.png").string (),
+                          agex::apps::renderPlot (plot));
+  }
+  return 0;
+}
 }  // namespace
 
 int
@@ -94,13 +159,13 @@ main (int argc, char **argv)
 {
   agex::apps::PipelineParams params;
   std::vector<std::string> vector_flags;
-  std::string mode, dataset_dir, json_path, plot_path;
+  std::string mode, dataset_dir, json_path, plot_path, plots_dir, model_path = AGEX_BUNDLED_MODEL;
   int k = 5;
   float radius = 0.10f;
   bool keyframes = false, details = false;
 
-  po::options_description general ("agex_eval coverage --dataset DIR [options]\n"
-                                    "Evaluates AGEX on a labelled agex dataset");
+  po::options_description general ("agex_eval coverage|detect --dataset DIR[@SEQ,...] [options]\n"
+                                    "Evaluates AGEX coverage or body-part detection on a labelled agex dataset");
   general.add_options () ("help,h", "show this help") ("mode", po::value (&mode), "coverage")
     ("dataset", po::value (&dataset_dir), "dataset directory")
     ("k", po::value (&k)->default_value (k), "number of extrema per mesh scored")
@@ -108,7 +173,9 @@ main (int argc, char **argv)
     ("keyframes", po::bool_switch (&keyframes), "score keyframes only")
     ("details", po::bool_switch (&details), "list every scored label in the JSON (first rank, nearest point)")
     ("json", po::value (&json_path), "write the report as JSON here")
-    ("plot", po::value (&plot_path), "write the coverage-vs-k curve (k up to 20) as PNG here");
+    ("plot", po::value (&plot_path), "coverage: write the coverage-vs-k curve (k up to 20) as PNG here")
+    ("model", po::value (&model_path)->default_value (model_path), "detect: model file (default: the bundled model)")
+    ("plots", po::value (&plots_dir), "detect: write precision_recall.png into this directory");
   // The pipeline's own --k (points per mesh, centroid included) would make --k
   // ambiguous; evaluateCoverage sets the pipeline's k from the extrema scored.
   po::options_description pipeline ("Pipeline (defaults isolate a person 1.3-2.6 m in front of the sensor,\n"
@@ -131,13 +198,16 @@ main (int argc, char **argv)
       throw std::runtime_error ("--dataset is required (see --help)");
     if (k < 1 || !(radius > 0.f))
       throw std::runtime_error ("--k must be at least 1 and --radius positive");
+    if (mode == "detect")
+      return evaluateDetection (agex::apps::selectDataset (dataset_dir, keyframes), model_path, radius, json_path,
+                                plots_dir);
     const agex::Dataset dataset = agex::Dataset::read (dataset_dir);
     for (const auto &out : {json_path, plot_path})
       if (!out.empty ())
         agex::checkOutputIsNotInput (out, {dataset_dir + "/dataset.json", dataset_dir + "/labels.csv"});
     if (mode == "coverage")
       return evaluateCoverage (dataset, params, k, radius, keyframes, details, json_path, plot_path);
-    throw std::runtime_error ("unknown mode '" + mode + "' (expected coverage)");
+    throw std::runtime_error ("unknown mode '" + mode + "' (expected coverage or detect)");
   }
   catch (const std::exception &e)
   {

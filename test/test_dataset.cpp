@@ -21,6 +21,7 @@
 #include <initializer_list>
 #include <iomanip>
 #include <iterator>
+#include <set>
 #include <sstream>
 
 #ifndef AGEX_CONVERT_EXECUTABLE
@@ -933,3 +934,144 @@ TEST_F (BonnConversion, EvalCoverageWritesTheDocumentedReport)
              1);
 }
 }  // namespace
+
+// ---------------------------------------------------------------------------
+// Body-part apps end to end: agex_train on Bonn sequence 1, agex_detect on a frame
+// and on the dataset (JSON lines, resumable), agex_eval detect, damaged models.
+
+namespace
+{
+class BodyPartApps : public BonnConversion
+{
+protected:
+  std::string model () const { return tmp_.file ("model.yml"); }
+  void SetUp () override
+  {
+    BonnConversion::SetUp ();
+    if (IsSkipped () || HasFatalFailure ())
+      return;
+    // A small, fast model: enough to tell the parts apart on the frames it saw.
+    ASSERT_EQ (run (quoted (AGEX_TRAIN_EXECUTABLE) + " --dataset " + quoted (dataset ()) +
+                    " --weak-count 40 --fragments 20 --random-negatives 2 --out " + quoted (model ()) + " >> " +
+                    quoted (log ()) + " 2>&1"),
+               0)
+        << readText (log ());
+  }
+};
+
+std::vector<nlohmann::json>
+jsonLines (const std::string &path)
+{
+  std::vector<nlohmann::json> lines;
+  std::ifstream in (path);
+  for (std::string line; std::getline (in, line);)
+    lines.push_back (nlohmann::json::parse (line));
+  return lines;
+}
+}  // namespace
+
+TEST_F (BodyPartApps, DetectsTheHeadOfAFrameSortedByConfidence)
+{
+  const std::string json = tmp_.file ("detections.json"), overlay = tmp_.file ("detections.png");
+  const agex::Dataset ds = agex::Dataset::read (dataset ());
+  ASSERT_EQ (run (quoted (AGEX_DETECT_EXECUTABLE) + " " + quoted (ds.framePath ("1_002")) + " --model " +
+                  quoted (model ()) + " --json " + quoted (json) + " --overlay " + quoted (overlay) + " >> " +
+                  quoted (log ()) + " 2>&1"),
+             0)
+      << readText (log ());
+  const auto doc = nlohmann::json::parse (readText (json));
+  ASSERT_FALSE (doc.at ("detections").empty ());
+  EXPECT_TRUE (fs::file_size (overlay) > 1000);
+  float previous = 2.f;
+  for (const auto &d : doc["detections"])
+  {
+    const float c = d.at ("confidence").get<float> ();
+    EXPECT_LE (c, previous) << "detections must be sorted by confidence";
+    EXPECT_GE (c, 0.f);
+    EXPECT_LE (c, 1.f);
+    previous = c;
+    agex::BodyPart part;
+    EXPECT_TRUE (agex::parseBodyPart (d.at ("class").get<std::string> (), part));
+  }
+  // The most confident head detection is the labelled head (a frame it trained on).
+  Eigen::Vector3f head_tip = Eigen::Vector3f::Constant (NAN);
+  for (const auto &l : ds.labelsOf ("1_002"))
+    if (l.part == agex::BodyPart::Head)
+      head_tip = l.tip;
+  ASSERT_TRUE (head_tip.allFinite ());
+  bool found = false;
+  for (const auto &d : doc["detections"])
+    if (d["class"] == "head")
+    {
+      const Eigen::Vector3f p (d["position"][0].get<float> (), d["position"][1].get<float> (),
+                               d["position"][2].get<float> ());
+      EXPECT_LT ((p - head_tip).norm (), 0.10f) << "most confident head detection";
+      EXPECT_GT (d["confidence"].get<float> (), 0.5f);
+      found = true;
+      break;
+    }
+  EXPECT_TRUE (found) << "no head detection";
+}
+
+TEST_F (BodyPartApps, JsonLinesInParallelAndResumable)
+{
+  const std::string json = tmp_.file ("all.jsonl");
+  const std::string command = quoted (AGEX_DETECT_EXECUTABLE) + " " + quoted (dataset ()) + " --model " +
+                              quoted (model ()) + " --jobs 2 --json " + quoted (json) + " >> " + quoted (log ()) +
+                              " 2>&1";
+  ASSERT_EQ (run (command), 0) << readText (log ());
+  auto lines = jsonLines (json);
+  ASSERT_EQ (lines.size (), 33u);
+  std::set<std::string> frames;
+  for (const auto &l : lines)
+    frames.insert (l.at ("frame").get<std::string> ());
+  EXPECT_EQ (frames.size (), 33u) << "each frame once";
+
+  // A rerun does nothing new; a torn last line (an interrupted run) is redone.
+  ASSERT_EQ (run (command), 0);
+  EXPECT_EQ (jsonLines (json).size (), 33u);
+  std::string text = readText (json);
+  text.resize (text.size () - 40);
+  writeText (json, text);
+  ASSERT_EQ (run (command), 0) << readText (log ());
+  lines = jsonLines (json);
+  EXPECT_EQ (lines.size (), 33u);
+}
+
+TEST_F (BodyPartApps, EvalDetectReportsAveragePrecision)
+{
+  const std::string json = tmp_.file ("eval.json");
+  ASSERT_EQ (run (quoted (AGEX_EVAL_EXECUTABLE) + " detect --dataset " + quoted (dataset ()) + " --keyframes --model " +
+                  quoted (model ()) + " --json " + quoted (json) + " --plots " + quoted (tmp_.file ("plots")) +
+                  " >> " + quoted (log ()) + " 2>&1"),
+             0)
+      << readText (log ());
+  const auto doc = nlohmann::json::parse (readText (json));
+  EXPECT_EQ (doc.at ("frames").get<int> (), 11);
+  for (const char *part : {"head", "hand", "foot"})
+  {
+    const double ap = doc.at ("ap").at (part).get<double> ();
+    EXPECT_GE (ap, 0.0);
+    EXPECT_LE (ap, 1.0);
+  }
+  // On frames it was trained on, the head is found.
+  EXPECT_GT (doc["ap"]["head"].get<double> (), 0.5);
+  EXPECT_TRUE (doc.contains ("confusion_at_0.75"));
+  EXPECT_TRUE (fs::exists (tmp_.file ("plots") + "/precision_recall.png"));
+}
+
+TEST_F (BodyPartApps, DamagedModelIsAClearError)
+{
+  const std::string damaged = tmp_.file ("damaged.yml");
+  std::string text = readText (model ());
+  writeText (damaged, text.substr (0, text.size () / 2));
+  const std::string out = tmp_.file ("out.txt");
+  EXPECT_EQ (run (quoted (AGEX_DETECT_EXECUTABLE) + " " + quoted (AGEX_SOURCE_DIR "/data/frames/bonn_1_002.png") +
+                  " --model " + quoted (damaged) + " > " + quoted (out) + " 2>&1"),
+             1);
+  EXPECT_NE (readText (out).find (damaged), std::string::npos) << readText (out);
+  EXPECT_EQ (run (quoted (AGEX_DETECT_EXECUTABLE) + " " + quoted (AGEX_SOURCE_DIR "/data/frames/bonn_1_002.png") +
+                  " --model " + quoted (tmp_.file ("missing.yml")) + " > " + quoted (out) + " 2>&1"),
+             1);
+  EXPECT_NE (readText (out).find ("missing.yml"), std::string::npos) << readText (out);
+}

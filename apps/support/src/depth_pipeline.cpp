@@ -92,13 +92,29 @@ runDepthPipeline (const pcl::PointCloud<pcl::PointXYZ>::ConstPtr &input, const P
   PipelineResult result;
   Cloud::Ptr cloud (new Cloud (*input));
 
-  // 1. Mixed pixels, on the full frame so that both sides of every jump are seen
-  // (after the crop the far side of a silhouette would already be gone).
+  // 1. Bounding box: which points we keep.
   auto start = Clock::now ();
-  if (params.remove_mixed_pixels && cloud->isOrganized ())
+  pcl::IndicesPtr inside (new pcl::Indices);
   {
-    agex::MixedPixelFilter<pcl::PointXYZ> mixed (true);
+    pcl::CropBox<pcl::PointXYZ> crop;
+    crop.setInputCloud (cloud);
+    crop.setMin (Eigen::Vector4f (params.crop_min.x (), params.crop_min.y (), params.crop_min.z (), 1.f));
+    crop.setMax (Eigen::Vector4f (params.crop_max.x (), params.crop_max.y (), params.crop_max.z (), 1.f));
+    crop.filter (*inside);
+  }
+  result.ms.emplace_back ("crop", msSince (start));
+
+  // 2. Mixed pixels among the kept points, judged against neighbours from the whole
+  // frame: outside the box the far side of a silhouette is still there to be seen.
+  start = Clock::now ();
+  std::vector<unsigned char> keep (cloud->size (), 0);
+  for (const auto i : *inside)
+    keep[i] = 1;
+  if (params.remove_mixed_pixels && cloud->isOrganized () && !inside->empty ())
+  {
+    agex::MixedPixelFilter<pcl::PointXYZ> mixed;
     mixed.setInputCloud (cloud);
+    mixed.setIndices (inside);
     mixed.setWindowRadius (params.mixed_window_radius);
     mixed.setMinJump (params.mixed_min_jump);
     mixed.setMaxVeilAngle (params.mixed_max_veil_angle_deg);
@@ -106,25 +122,13 @@ runDepthPipeline (const pcl::PointCloud<pcl::PointXYZ>::ConstPtr &input, const P
     pcl::Indices flying;
     mixed.filter (flying);
     for (const auto i : flying)
-      invalidate ((*cloud)[i]);
+      keep[i] = 0;
     result.mixed_pixels_removed = static_cast<int> (flying.size ());
   }
+  for (std::size_t i = 0; i < cloud->size (); ++i)
+    if (!keep[i])
+      invalidate ((*cloud)[i]);
   result.ms.emplace_back ("mixed_pixels", msSince (start));
-
-  // 2. Bounding box, keeping the frame organized.
-  start = Clock::now ();
-  {
-    pcl::CropBox<pcl::PointXYZ> crop (true);
-    crop.setInputCloud (cloud);
-    crop.setMin (Eigen::Vector4f (params.crop_min.x (), params.crop_min.y (), params.crop_min.z (), 1.f));
-    crop.setMax (Eigen::Vector4f (params.crop_max.x (), params.crop_max.y (), params.crop_max.z (), 1.f));
-    crop.setKeepOrganized (true);
-    Cloud::Ptr cropped (new Cloud);
-    crop.filter (*cropped);
-    if (cropped->size () == cloud->size ())  // CropBox outputs nothing for an empty input
-      cloud = cropped;
-  }
-  result.ms.emplace_back ("crop", msSince (start));
 
   // 3. Denoise depth inside the box only, which is most of the frame's cost saved.
   // pcl::MedianFilter moves z only; rescaling x and y keeps the point on its

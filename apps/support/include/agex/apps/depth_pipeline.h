@@ -1,6 +1,6 @@
 #pragma once
 // The depth pipeline as the apps run it: library stages composed in the order
-// frame -> mixed-pixel removal -> crop box -> median denoise -> floor removal ->
+// frame -> crop box -> mixed-pixel removal -> median denoise -> floor removal ->
 // spur removal -> surface meshes -> AGEX. Each stage is a PCL or agex class used as a PCL user
 // would; this file only wires them together and times them.
 
@@ -28,7 +28,7 @@ namespace apps
 struct PipelineParams
 {
   // Denoising (pcl::MedianFilter on depth); window 0 or 1 disables it.
-  int median_window = 5;
+  int median_window = 3;
   float median_max_movement = 0.05f;
   // Mixed pixels (agex::MixedPixelFilter).
   bool remove_mixed_pixels = true;

@@ -1,0 +1,272 @@
+// agex_detect: heads, hands and feet in depth frames.
+//   agex_detect INPUT... [--model MODEL] [--json FILE] [--overlay FILE.png] [--jobs N]
+// INPUT is a frame file, a directory of frames or an agex dataset. One frame: a JSON
+// document. Several: JSON lines, one per frame, written as they finish, in parallel
+// with --jobs; a rerun with the same --json skips the frames already there.
+
+#include <agex/apps/body_parts.h>
+#include <agex/apps/command_line.h>
+#include <agex/apps/depth_pipeline.h>
+#include <agex/apps/output.h>
+#include <agex/classification/patch_classifier.h>
+#include <agex/common/atomic_file.h>
+#include <agex/common/dataset.h>
+#include <agex/common/frame_io.h>
+
+#include <boost/program_options.hpp>
+
+#include <opencv2/imgproc.hpp>
+
+#include <atomic>
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <mutex>
+#include <set>
+#include <thread>
+
+#include <fcntl.h>
+#include <unistd.h>
+
+namespace fs = std::filesystem;
+namespace po = boost::program_options;
+
+namespace
+{
+struct Job
+{
+  std::string name;  ///< frame path, or dataset/id
+  std::string path;  ///< file to load
+};
+
+std::vector<Job>
+collectJobs (const std::vector<std::string> &inputs)
+{
+  std::vector<Job> jobs;
+  for (const auto &input : inputs)
+  {
+    if (fs::is_directory (input) && fs::exists (fs::path (input) / "dataset.json"))
+    {
+      const agex::Dataset dataset = agex::Dataset::read (input);
+      for (const auto &frame : dataset.frames ())
+        jobs.push_back ({input + "/" + frame.id, dataset.framePath (frame.id)});
+    }
+    else if (fs::is_directory (input))
+    {
+      std::vector<std::string> files;
+      for (const auto &entry : fs::directory_iterator (input))
+      {
+        const std::string ext = entry.path ().extension ().string ();
+        if (entry.is_regular_file () && (ext == ".pcd" || ext == ".png" || ext == ".u16"))
+          files.push_back (entry.path ().string ());
+      }
+      std::sort (files.begin (), files.end ());
+      for (const auto &f : files)
+        jobs.push_back ({f, f});
+    }
+    else if (fs::exists (input))
+      jobs.push_back ({input, input});
+    else
+      throw std::runtime_error (input + ": no such file or directory");
+  }
+  return jobs;
+}
+
+/** Frames already in a JSON-lines file; a torn last line (an interrupted run) is dropped
+  * by rewriting the file without it, atomically. */
+std::set<std::string>
+framesDone (const std::string &path)
+{
+  std::set<std::string> done;
+  std::ifstream in (path);
+  if (!in)
+    return done;
+  std::string line, kept;
+  bool torn = false;
+  while (std::getline (in, line))
+  {
+    try
+    {
+      const auto doc = nlohmann::json::parse (line);
+      done.insert (doc.at ("frame").get<std::string> ());
+      kept += line + "\n";
+    }
+    catch (const std::exception &)
+    {
+      torn = true;
+    }
+  }
+  if (torn)
+    agex::writeFileAtomic (path, kept);
+  return done;
+}
+
+cv::Mat
+renderDetections (const agex::apps::PipelineResult &prepared, const pcl::PointCloud<pcl::PointXYZ> &frame,
+                  const std::vector<agex::apps::Detection> &detections, float min_confidence)
+{
+  cv::Mat image = agex::apps::renderOverlay (frame, prepared.meshes, pcl::PointCloud<agex::InterestPoint> ());
+  const int scale = std::max (1, image.rows / static_cast<int> (std::max (1u, frame.height)));
+  for (auto it = detections.rbegin (); it != detections.rend (); ++it)  // most confident drawn last
+  {
+    if (it->confidence < min_confidence)
+      continue;
+    const cv::Point centre ((it->point.u + 0.5) * scale, (it->point.v + 0.5) * scale);
+    const cv::Scalar colour = agex::apps::bodyPartColour (static_cast<int> (it->part));
+    const cv::Point tip = centre + cv::Point (static_cast<int> (std::lround (it->point.orientation[0] * 40)),
+                                              static_cast<int> (std::lround (it->point.orientation[1] * 40)));
+    if (tip != centre)
+      cv::arrowedLine (image, centre, tip, colour, 2, cv::LINE_AA, 0, 0.3);
+    cv::circle (image, centre, 9, colour, 3, cv::LINE_AA);
+    char text[64];
+    std::snprintf (text, sizeof text, "%s %.2f", agex::bodyPartName (it->part), it->confidence);
+    cv::putText (image, text, centre + cv::Point (12, -8), cv::FONT_HERSHEY_SIMPLEX, 0.55, cv::Scalar (0, 0, 0), 3,
+                 cv::LINE_AA);
+    cv::putText (image, text, centre + cv::Point (12, -8), cv::FONT_HERSHEY_SIMPLEX, 0.55, colour, 1, cv::LINE_AA);
+  }
+  return image;
+}
+}  // namespace
+
+int
+main (int argc, char **argv)
+{
+  agex::FrameOptions frame_options;
+  std::vector<std::string> inputs;
+  std::string model_path = AGEX_BUNDLED_MODEL, json_path, overlay_path;
+  int jobs = 1;
+  float min_confidence = 0.5f;
+
+  po::options_description general ("agex_detect INPUT... [options]\n"
+                                    "Heads, hands and feet in depth frames (.pcd, .png, .u16, directories, datasets)");
+  general.add_options () ("help,h", "show this help") ("input", po::value (&inputs)->multitoken (), "inputs")
+    ("model", po::value (&model_path)->default_value (model_path), "model file (default: the bundled model)")
+    ("json", po::value (&json_path), "one frame: JSON document; several: JSON lines, one per frame (resumable)")
+    ("overlay", po::value (&overlay_path), "overlay PNG (one frame only)")
+    ("min-confidence", po::value (&min_confidence)->default_value (min_confidence, "0.5"),
+     "detections drawn on the overlay and printed")
+    ("jobs", po::value (&jobs)->default_value (jobs), "frames processed in parallel");
+  po::options_description all;
+  all.add (general).add (agex::apps::frameOptionsDescription (frame_options));
+  po::positional_options_description positional;
+  positional.add ("input", -1);
+
+  try
+  {
+    if (!agex::apps::parseCommandLine (argc, argv, all, positional))
+      return 0;
+    if (inputs.empty ())
+      throw std::runtime_error ("no INPUT given (see --help)");
+    if (jobs < 1)
+      throw std::runtime_error ("--jobs must be at least 1");
+    const agex::PatchClassifier classifier = agex::PatchClassifier::load (model_path);
+    const agex::apps::DetectorSettings settings = agex::apps::DetectorSettings::fromJson (classifier.metadata ());
+    const std::vector<Job> job_list = collectJobs (inputs);
+    std::vector<std::string> input_files;
+    for (const auto &j : job_list)
+      input_files.push_back (j.path);
+    for (const auto &out : {json_path, overlay_path})
+      if (!out.empty ())
+        agex::checkOutputIsNotInput (out, input_files);
+
+    auto process = [&] (const Job &job, nlohmann::json &doc, cv::Mat *overlay) {
+      const auto start = std::chrono::steady_clock::now ();
+      const agex::Frame frame = agex::loadFrame (job.path, frame_options);
+      const auto prepared = agex::apps::runDepthPipeline (frame.cloud, settings.pipeline);
+      double patch_ms = 0, classify_ms = 0;
+      const auto detections = agex::apps::detectBodyParts (prepared, classifier, settings.patch, &patch_ms, &classify_ms);
+      doc = {{"frame", job.name}, {"width", frame.cloud->width}, {"height", frame.cloud->height},
+             {"detections", nlohmann::json::array ()}};
+      for (const auto &d : detections)
+        doc["detections"].push_back (agex::apps::detectionJson (d));
+      doc["ms"] = nlohmann::json::object ();
+      for (const auto &[stage, ms] : prepared.ms)
+        if (stage != "total")
+          doc["ms"][stage] = ms;
+      doc["ms"]["patches"] = patch_ms;
+      doc["ms"]["classify"] = classify_ms;
+      doc["ms"]["total"] = std::chrono::duration<double, std::milli> (std::chrono::steady_clock::now () - start).count ();
+      if (overlay)
+        *overlay = renderDetections (prepared, *frame.cloud, detections, min_confidence);
+    };
+
+    if (job_list.size () == 1 && fs::is_regular_file (inputs[0]))
+    {
+      nlohmann::json doc;
+      cv::Mat overlay;
+      process (job_list[0], doc, overlay_path.empty () ? nullptr : &overlay);
+      if (!json_path.empty ())
+        agex::apps::writeJson (json_path, doc);
+      else
+        std::cout << doc.dump (2) << "\n";
+      if (!overlay_path.empty ())
+        agex::apps::writePng (overlay_path, overlay);
+      for (const auto &d : doc["detections"])
+        if (d["confidence"].get<float> () >= min_confidence)
+          std::cerr << "  " << d["class"].get<std::string> () << " " << d["confidence"].get<float> () << " at pixel ("
+                    << d["pixel"][0] << ", " << d["pixel"][1] << ")\n";
+      return 0;
+    }
+
+    if (!overlay_path.empty ())
+      throw std::runtime_error ("--overlay takes a single frame");
+    const std::set<std::string> done = json_path.empty () ? std::set<std::string> () : framesDone (json_path);
+    std::vector<const Job *> todo;
+    for (const auto &j : job_list)
+      if (!done.count (j.name))
+        todo.push_back (&j);
+    if (!done.empty ())
+      std::cerr << "agex_detect: " << done.size () << " frames already in " << json_path << ", " << todo.size ()
+                << " to go\n";
+    int fd = 1;
+    if (!json_path.empty ())
+    {
+      fd = ::open (json_path.c_str (), O_WRONLY | O_CREAT | O_APPEND, 0644);
+      if (fd < 0)
+        throw std::runtime_error (json_path + ": cannot open for appending");
+    }
+    std::mutex output_mutex;
+    std::atomic<std::size_t> next{0}, finished{0};
+    std::string first_error;
+    agex::apps::Progress progress ("frames", todo.size ());
+    auto worker = [&] () {
+      for (std::size_t i = next++; i < todo.size (); i = next++)
+      {
+        nlohmann::json doc;
+        try
+        {
+          process (*todo[i], doc, nullptr);
+        }
+        catch (const std::exception &e)
+        {
+          std::lock_guard<std::mutex> lock (output_mutex);
+          if (first_error.empty ())
+            first_error = e.what ();
+          continue;
+        }
+        // One write per line: lines of parallel workers never interleave.
+        const std::string line = doc.dump () + "\n";
+        std::lock_guard<std::mutex> lock (output_mutex);
+        if (::write (fd, line.data (), line.size ()) != static_cast<ssize_t> (line.size ()) && first_error.empty ())
+          first_error = json_path + ": write failed";
+        progress.step (++finished);
+      }
+    };
+    std::vector<std::thread> threads;
+    for (int t = 0; t < jobs; ++t)
+      threads.emplace_back (worker);
+    for (auto &t : threads)
+      t.join ();
+    if (fd != 1)
+      ::close (fd);
+    if (!first_error.empty ())
+      throw std::runtime_error (first_error + " (frames done so far are kept; rerun to continue)");
+    return 0;
+  }
+  catch (const std::exception &e)
+  {
+    std::cerr << "agex_detect: error: " << e.what () << "\n";
+    return 1;
+  }
+}

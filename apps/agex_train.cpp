@@ -1,0 +1,121 @@
+// agex_train: trains the body-part patch classifier from labelled agex datasets
+// and writes one model file holding everything detection needs.
+//   agex_train --dataset DIR[@SEQ,...] [--dataset ...] --out MODEL [options]
+
+#include <agex/apps/body_parts.h>
+#include <agex/apps/command_line.h>
+#include <agex/apps/dataset_selection.h>
+#include <agex/apps/depth_pipeline.h>
+#include <agex/classification/patch_classifier.h>
+#include <agex/common/atomic_file.h>
+
+#include <boost/program_options.hpp>
+
+#include <chrono>
+#include <iostream>
+#include <sstream>
+
+namespace po = boost::program_options;
+
+int
+main (int argc, char **argv)
+{
+  agex::apps::PipelineParams params;
+  params.k = 11;  // the centroid and 10 extrema per mesh: positives and hard negatives
+  agex::apps::PatchParams patch;
+  agex::PatchClassifierParams classifier_params;
+  std::vector<std::string> vector_flags, datasets;
+  std::string out;
+  int random_negatives = 8;
+  float radius = 0.10f;
+  bool keyframes = false;
+  std::uint64_t seed = 1;
+
+  po::options_description general ("agex_train --dataset DIR[@SEQ,...] [--dataset ...] --out MODEL [options]\n"
+                                    "Trains the body-part classifier on labelled agex datasets");
+  general.add_options () ("help,h", "show this help")
+    ("dataset", po::value (&datasets)->multitoken (), "dataset directory, optionally @sequences (e.g. bonn@1,2,3)")
+    ("out", po::value (&out), "model file to write")
+    ("keyframes", po::bool_switch (&keyframes), "train on keyframes only")
+    ("radius", po::value (&radius)->default_value (radius, "0.1"), "metres from a labelled tip for a positive")
+    ("random-negatives", po::value (&random_negatives)->default_value (random_negatives),
+     "random surface points per frame added as negatives")
+    ("weak-count", po::value (&classifier_params.weak_count)->default_value (classifier_params.weak_count),
+     "boosting rounds (decision stumps) per class")
+    ("fragments", po::value (&classifier_params.dictionary.fragments_per_class)
+                      ->default_value (classifier_params.dictionary.fragments_per_class),
+     "dictionary fragments cut per class")
+    ("seed", po::value (&seed)->default_value (seed), "random seed (fragments, negatives)")
+    ("patch-size", po::value (&patch.size)->default_value (patch.size), "patch cells per side (<= 41)")
+    ("patch-extent", po::value (&patch.extent)->default_value (patch.extent, "0.6"), "patch width, metres")
+    ("patch-clamp", po::value (&patch.clamp)->default_value (patch.clamp, "0.3"), "relative depth clamp, metres");
+  po::options_description all;
+  all.add (general).add (agex::apps::pipelineOptionsDescription (params, vector_flags));
+
+  try
+  {
+    if (!agex::apps::parseCommandLine (argc, argv, all, po::positional_options_description ()))
+      return 0;
+    agex::apps::finishPipelineOptions (vector_flags, params);
+    if (datasets.empty () || out.empty ())
+      throw std::runtime_error ("--dataset and --out are required (see --help)");
+    classifier_params.dictionary.seed = seed;
+    const auto start = std::chrono::steady_clock::now ();
+
+    std::vector<agex::DepthPatch> patches;
+    std::vector<int> classes;
+    std::mt19937_64 rng (seed);
+    nlohmann::json sources = nlohmann::json::array ();
+    std::size_t frames = 0;
+    for (const auto &spec : datasets)
+    {
+      const agex::apps::DatasetSelection selection = agex::apps::selectDataset (spec, keyframes);
+      agex::apps::Progress progress ("frames of " + spec, selection.frame_ids.size ());
+      for (std::size_t i = 0; i < selection.frame_ids.size (); ++i)
+      {
+        const auto &id = selection.frame_ids[i];
+        const auto labels = selection.dataset.labelsOf (id);
+        if (labels.empty ())
+          continue;  // unlabelled frames say nothing about where parts are
+        const auto prepared = agex::apps::runDepthPipeline (selection.dataset.loadFrame (id), params);
+        agex::apps::collectTrainingSamples (prepared, labels, radius, random_negatives, patch, rng, patches, classes);
+        ++frames;
+        progress.step (i + 1);
+      }
+      sources.push_back ({{"dataset", spec}, {"frames", selection.frame_ids.size ()}});
+    }
+    std::array<int, 4> counts{};
+    for (const int c : classes)
+      ++counts[c < 0 ? 3 : c];
+    std::cout << "training on " << patches.size () << " patches from " << frames << " frames: head " << counts[0]
+              << ", hand " << counts[1] << ", foot " << counts[2] << ", background " << counts[3] << "\n";
+
+    agex::PatchClassifier classifier;
+    classifier.train (patches, classes, agex::kBodyPartCount, classifier_params, [] (int done, int total) {
+      std::cerr << "  boosted class " << done << "/" << total << "\n";
+    });
+    const double seconds = std::chrono::duration<double> (std::chrono::steady_clock::now () - start).count ();
+
+    agex::apps::DetectorSettings settings;
+    settings.pipeline = params;
+    settings.patch = patch;
+    std::ostringstream command;
+    for (int i = 0; i < argc; ++i)
+      command << (i ? " " : "") << argv[i];
+    nlohmann::json metadata = settings.toJson ();
+    metadata["training"] = {{"command", command.str ()},
+                            {"datasets", sources},
+                            {"frames", frames},
+                            {"patches", {{"head", counts[0]}, {"hand", counts[1]}, {"foot", counts[2]}, {"background", counts[3]}}},
+                            {"radius_m", radius},
+                            {"seconds", seconds}};
+    classifier.save (out, metadata);
+    std::cout << out << ": trained in " << seconds << " s\n";
+    return 0;
+  }
+  catch (const std::exception &e)
+  {
+    std::cerr << "agex_train: error: " << e.what () << "\n";
+    return 1;
+  }
+}

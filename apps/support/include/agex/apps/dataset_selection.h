@@ -1,0 +1,24 @@
+#pragma once
+// "--dataset DIR[@SEQ,SEQ,...]": a dataset directory, optionally restricted to some
+// of its sequences (split train and test data by sequence, never by frame).
+
+#include <agex/common/dataset.h>
+
+#include <string>
+#include <vector>
+
+namespace agex
+{
+namespace apps
+{
+struct DatasetSelection
+{
+  Dataset dataset;
+  std::vector<std::string> frame_ids;  ///< selected frames, in dataset order
+};
+
+/** \brief Reads "DIR" or "DIR@1,2,3"; keyframes_only keeps frames with a keyframe label.
+  * \throws DatasetError (bad dataset) or std::runtime_error (unknown sequence) */
+DatasetSelection selectDataset (const std::string &spec, bool keyframes_only);
+}  // namespace apps
+}  // namespace agex

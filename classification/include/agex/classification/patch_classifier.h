@@ -1,0 +1,146 @@
+#pragma once
+// Depth-patch classifier: fragment features (FragmentDictionary) and one-vs-rest
+// GentleBoost decision stumps per class (cv::ml::Boost), saved to and loaded from one
+// model file. See doc/classifier.md.
+
+#include <agex/classification/fragment_dictionary.h>
+#include <agex/classification/model_error.h>
+#include <agex/common/point_types.h>
+
+#include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
+#include <opencv2/ml.hpp>
+
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace agex
+{
+struct PatchClassifierParams
+{
+  FragmentDictionaryParams dictionary;
+  int weak_count = 150;            ///< GentleBoost rounds per class (decision stumps: max depth 1)
+  double weight_trim_rate = 0.95;  ///< cv::ml::Boost weight trimming; 0 or 1: none
+};
+
+/** The patch geometry a model was trained on; a detector must cut its patches the same way
+  * (agex::DepthPatchEstimation's setPatchSize, setPatchExtent, setClampDepth). */
+struct PatchGeometry
+{
+  int size = 0;         ///< cells per side
+  float extent = 0.f;   ///< metres across (size * metres_per_cell of the training patches)
+  float clamp = 0.f;    ///< relative depth clamp and background value, metres
+};
+
+/** \brief Classifies depth patches into classes 0..classes()-1 (or none of them).
+  *
+  * Training cuts a FragmentDictionary from each class's positives, computes every
+  * fragment feature of every training patch once, then trains one binary GentleBoost
+  * (cv::ml::Boost::GENTLE, decision stumps) per class: that class against everything else
+  * (the other classes and the background, label -1).
+  *
+  * classify () evaluates only the fragments the stumps use and walks the stumps itself
+  * (the same arithmetic as cv::ml::Boost::predict with RAW_OUTPUT | PREDICT_SUM, bit for
+  * bit). It is const and thread-safe.
+  */
+class PatchClassifier
+{
+public:
+  static constexpr int kFormatVersion = 1;
+  /** The value of the model file's "format" field. */
+  static constexpr const char *kFormatName = "agex-model";
+
+  /** \brief Trains the classifier (replacing any previous state; metadata is cleared).
+    * \param labels     labels[i] in {-1 (background), 0..classes-1}
+    * \param progress   progress (done, total) after each class's booster (may be null)
+    * \throws std::invalid_argument on bad input: no patches, patches.size () !=
+    *         labels.size (), classes < 1, a label out of range, a class without positives
+    *         or without negatives, patches of different sizes or cell pitches, a non-finite
+    *         cell, bad parameters (weak_count < 1, weight_trim_rate outside [0, 1], see
+    *         FragmentDictionary::build)
+    * \throws std::runtime_error if cv::ml::Boost fails to train */
+  void train (const std::vector<agex::DepthPatch> &patches, const std::vector<int> &labels, int classes,
+              const PatchClassifierParams &params, const std::function<void (int, int)> &progress = nullptr);
+
+  bool trained () const { return !trees_.empty (); }
+  int classes () const { return static_cast<int> (trees_.size ()); }
+
+  /** \brief Per class c: margins[c] = the boosted margin (sum of the weak learners, what
+    * cv::ml::Boost::predict returns with RAW_OUTPUT | PREDICT_SUM) and confidences[c] =
+    * 1 / (1 + exp (-2 margin)) in [0, 1] (GentleBoost's margin estimates half the
+    * log-odds). Either pointer may be null; each must hold classes () values.
+    * \throws std::logic_error if not trained, std::invalid_argument if patch.size is not
+    *         the trained patch size */
+  void classify (const agex::DepthPatch &patch, float *margins, float *confidences) const;
+
+  /** \brief Writes the model (format name, version, patch geometry, training parameters,
+    * metadata, dictionary, boosters) to path atomically (agex::writeFileAtomic).
+    * \throws std::logic_error if not trained, std::runtime_error naming the path if it
+    *         cannot be written */
+  void save (const std::string &path, const nlohmann::json &metadata) const;
+  /** \brief Reads a model written by save ().
+    * \throws ModelError naming the file and the problem: missing or unreadable, not an
+    *         agex model, another format version, or damaged (truncated, missing or invalid
+    *         nodes, a booster that fails to load or does not fit the dictionary, a fragment
+    *         of the wrong size, metadata that is not JSON) */
+  static PatchClassifier load (const std::string &path);
+
+  /** The metadata the model was saved with (null after train ()). */
+  const nlohmann::json &metadata () const { return metadata_; }
+
+  /** The geometry of the training patches. size and extent come from the patches
+    * (size, size * metres_per_cell); clamp is inferred as the largest |cell| of the
+    * training patches (the background value +clamp is in almost every real patch): set
+    * it with setPatchGeometry when it is known. */
+  const PatchGeometry &patchGeometry () const { return geometry_; }
+  /** \throws std::invalid_argument if geometry.size is not the trained patch size or
+    *         extent / clamp are not finite and positive */
+  void setPatchGeometry (const PatchGeometry &geometry);
+
+  const PatchClassifierParams &params () const { return params_; }
+  const FragmentDictionary &dictionary () const { return dictionary_; }
+  /** The boosters, one per class (cv::ml::Boost::predict on the full feature row gives the
+    * same margins as classify). */
+  const std::vector<cv::Ptr<cv::ml::Boost>> &boosters () const { return boosters_; }
+  /** Sorted indices of the fragments some stump uses: all classify () computes. */
+  const std::vector<int> &usedFragments () const { return used_fragments_; }
+
+private:
+  /** A tree flattened for evaluation: feature < 0 marks a leaf. */
+  struct TreeNode
+  {
+    int feature = -1;
+    float threshold = 0.f;  ///< go left if feature value <= threshold (cv::ml's rule)
+    int left = -1, right = -1;
+    double value = 0.0;
+  };
+  /** A depth-1 tree: value <= threshold ? left : right. */
+  struct Stump
+  {
+    int feature = 0;
+    float threshold = 0.f;
+    double left = 0.0, right = 0.0;
+  };
+  struct ClassTrees
+  {
+    std::vector<int> roots;
+    std::vector<TreeNode> nodes;
+    /** The same trees, in order, when every one is a stump (the usual case): summed
+      * without branches. Empty otherwise. */
+    std::vector<Stump> stumps;
+  };
+
+  /** Validates the boosters against the dictionary and flattens them; fills trees_ and
+    * used_fragments_. \throws ModelError (message without the file name) */
+  void prepare ();
+
+  FragmentDictionary dictionary_;
+  std::vector<cv::Ptr<cv::ml::Boost>> boosters_;
+  std::vector<ClassTrees> trees_;
+  std::vector<int> used_fragments_;
+  PatchGeometry geometry_;
+  PatchClassifierParams params_;
+  nlohmann::json metadata_;
+};
+}  // namespace agex

@@ -1,0 +1,676 @@
+#include <agex/classification/patch_classifier.h>
+
+#include <agex/common/atomic_file.h>
+
+#include <opencv2/core/utility.hpp>
+
+#include <algorithm>
+#include <condition_variable>
+#include <exception>
+#include <mutex>
+#include <thread>
+#include <cerrno>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+
+namespace agex
+{
+namespace
+{
+/** Metadata JSON is stored as a list of chunks of at most this many characters:
+  * cv::FileStorage refuses strings longer than 4096 characters. */
+constexpr std::size_t kMetadataChunk = 1000;
+/** Each chunk is written as '|' + text + '|' so that FileStorage quotes it and keeps it
+  * verbatim: it trims unquoted strings and takes "..." or '...' for already quoted. */
+constexpr char kChunkFence = '|';
+/** classify () keeps features on the stack up to this many fragments. */
+constexpr std::size_t kStackFeatures = 2048;
+
+int
+readInt (const cv::FileNode &node, const char *name)
+{
+  const cv::FileNode n = node[name];
+  if (n.empty () || !n.isInt ())
+    throw ModelError (std::string ("missing or invalid integer '") + name + "'");
+  return static_cast<int> (n);
+}
+
+double
+readReal (const cv::FileNode &node, const char *name)
+{
+  const cv::FileNode n = node[name];
+  if (n.empty () || !(n.isReal () || n.isInt ()))
+    throw ModelError (std::string ("missing or invalid number '") + name + "'");
+  return static_cast<double> (n);
+}
+
+/** Checks the parts of a booster node that cv::ml reads without checking (it indexes
+  * arrays with them), so that a damaged file fails here instead of in OpenCV. */
+void
+checkBoosterNode (const cv::FileNode &node, int features)
+{
+  if (!node.isMap ())
+    throw ModelError ("not a map");
+  if (readInt (node, "format") != 3)
+    throw ModelError ("unsupported cv::ml tree format (need 3)");
+  // cv::ml writes var_idx (all features, in order) even when every variable is used;
+  // anything else would remap the split variables.
+  const cv::FileNode var_idx = node["var_idx"];
+  if (!var_idx.empty ())
+  {
+    if (!var_idx.isSeq () || static_cast<int> (var_idx.size ()) != features)
+      throw ModelError ("var_idx does not list the " + std::to_string (features) + " dictionary fragments");
+    int k = 0;
+    for (cv::FileNodeIterator it = var_idx.begin (); it != var_idx.end (); ++it, ++k)
+      if (!(*it).isInt () || static_cast<int> (*it) != k)
+        throw ModelError ("var_idx does not list the dictionary fragments in order");
+  }
+  const cv::FileNode types = node["var_type"];
+  if (types.empty () || !types.isSeq () || static_cast<int> (types.size ()) != features + 1)
+    throw ModelError ("var_type does not match the " + std::to_string (features) + " dictionary fragments");
+  int i = 0;
+  for (cv::FileNodeIterator it = types.begin (); it != types.end (); ++it, ++i)
+    if (!(*it).isInt () || (i < features && static_cast<int> (*it) != 0))
+      throw ModelError ("a feature is not an ordered variable");
+  if (readInt (node, "var_all") != features + 1 || readInt (node, "var_count") != features)
+    throw ModelError ("var_all/var_count do not match the " + std::to_string (features) + " dictionary fragments");
+  const cv::FileNode trees = node["trees"];
+  if (trees.empty () || !trees.isSeq () || trees.size () == 0)
+    throw ModelError ("no trees");
+  if (readInt (node, "ntrees") != static_cast<int> (trees.size ()))
+    throw ModelError ("ntrees does not match the trees");
+  for (cv::FileNodeIterator t = trees.begin (); t != trees.end (); ++t)
+  {
+    const cv::FileNode nodes = (*t)["nodes"];
+    if (nodes.empty () || !nodes.isSeq () || nodes.size () == 0)
+      throw ModelError ("a tree without nodes");
+    for (cv::FileNodeIterator n = nodes.begin (); n != nodes.end (); ++n)
+    {
+      if (!(*n).isMap ())
+        throw ModelError ("a tree node is not a map");
+      const cv::FileNode splits = (*n)["splits"];
+      if (splits.empty ())
+        continue;
+      if (!splits.isSeq ())
+        throw ModelError ("invalid splits");
+      for (cv::FileNodeIterator s = splits.begin (); s != splits.end (); ++s)
+      {
+        const int var = readInt (*s, "var");
+        if (var < 0 || var >= features)
+          throw ModelError ("a split uses feature " + std::to_string (var) + " of " + std::to_string (features));
+        const cv::FileNode le = (*s)["le"], gt = (*s)["gt"];
+        const cv::FileNode c = le.empty () ? gt : le;
+        if (c.empty () || !(c.isReal () || c.isInt ()))
+          throw ModelError ("a split without a threshold");
+      }
+    }
+  }
+}
+
+std::string
+readWholeFile (const std::string &path)
+{
+  std::error_code ec;
+  if (!std::filesystem::exists (path, ec))
+    throw ModelError (path + ": model file not found");
+  if (std::filesystem::is_directory (path, ec))
+    throw ModelError (path + ": is a directory, not a model file");
+  std::ifstream in (path, std::ios::binary);
+  if (!in)
+    throw ModelError (path + ": cannot open the model file: " + std::strerror (errno));
+  std::ostringstream bytes;
+  bytes << in.rdbuf ();
+  if (in.bad ())
+    throw ModelError (path + ": cannot read the model file");
+  return bytes.str ();
+}
+}  // namespace
+
+void
+PatchClassifier::train (const std::vector<agex::DepthPatch> &patches, const std::vector<int> &labels, int classes,
+                        const PatchClassifierParams &params, const std::function<void (int, int)> &progress)
+{
+  if (patches.empty ())
+    throw std::invalid_argument ("PatchClassifier::train: no patches");
+  if (patches.size () != labels.size ())
+    throw std::invalid_argument ("PatchClassifier::train: " + std::to_string (patches.size ()) + " patches but " +
+                                 std::to_string (labels.size ()) + " labels");
+  if (classes < 1)
+    throw std::invalid_argument ("PatchClassifier::train: classes must be at least 1");
+  if (params.weak_count < 1)
+    throw std::invalid_argument ("PatchClassifier::train: weak_count must be at least 1");
+  if (!(params.weight_trim_rate >= 0.0 && params.weight_trim_rate <= 1.0))
+    throw std::invalid_argument ("PatchClassifier::train: weight_trim_rate must be in [0, 1]");
+
+  const int n = patches.front ().size;
+  const float pitch = patches.front ().metres_per_cell;
+  if (n < 1 || n > agex::DepthPatch::kMaxSize)
+    throw std::invalid_argument ("PatchClassifier::train: patch size " + std::to_string (n) + " outside 1.." +
+                                 std::to_string (agex::DepthPatch::kMaxSize));
+  std::vector<std::vector<const agex::DepthPatch *>> positives (static_cast<std::size_t> (classes));
+  std::vector<int> negatives (static_cast<std::size_t> (classes), 0);
+  float clamp = 0.f;
+  for (std::size_t i = 0; i < patches.size (); ++i)
+  {
+    const agex::DepthPatch &p = patches[i];
+    if (p.size != n)
+      throw std::invalid_argument ("PatchClassifier::train: patch " + std::to_string (i) + " has size " +
+                                   std::to_string (p.size) + ", patch 0 has " + std::to_string (n));
+    if (!(std::fabs (p.metres_per_cell - pitch) <= 1e-4f * std::fabs (pitch)))
+      throw std::invalid_argument ("PatchClassifier::train: patch " + std::to_string (i) +
+                                   " has another cell pitch (metres_per_cell) than patch 0");
+    for (int k = 0; k < n * n; ++k)
+    {
+      if (!std::isfinite (p.patch[k]))
+        throw std::invalid_argument ("PatchClassifier::train: patch " + std::to_string (i) + " has a non-finite cell");
+      clamp = std::max (clamp, std::fabs (p.patch[k]));
+    }
+    const int label = labels[i];
+    if (label < -1 || label >= classes)
+      throw std::invalid_argument ("PatchClassifier::train: label " + std::to_string (label) + " of patch " +
+                                   std::to_string (i) + " outside -1.." + std::to_string (classes - 1));
+    for (int c = 0; c < classes; ++c)
+      if (c == label)
+        positives[c].push_back (&p);
+      else
+        ++negatives[c];
+  }
+  for (int c = 0; c < classes; ++c)
+  {
+    if (positives[c].empty ())
+      throw std::invalid_argument ("PatchClassifier::train: class " + std::to_string (c) + " has no positives");
+    if (negatives[c] == 0)
+      throw std::invalid_argument ("PatchClassifier::train: class " + std::to_string (c) +
+                                   " has no negatives (every patch is of that class)");
+  }
+
+  FragmentDictionary dictionary;
+  dictionary.build (positives, params.dictionary);
+  const int features = static_cast<int> (dictionary.size ());
+
+  // Every feature of every patch, once: N x F floats, rows in parallel (each row is
+  // independent, so the result does not depend on the threads).
+  cv::Mat samples (static_cast<int> (patches.size ()), features, CV_32F);
+  cv::parallel_for_ (cv::Range (0, samples.rows), [&] (const cv::Range &range) {
+    for (int i = range.start; i < range.end; ++i)
+      dictionary.computeFeatures (patches[static_cast<std::size_t> (i)], samples.ptr<float> (i));
+  });
+
+  // One booster per class. cv::ml trains a tree on one thread (splits are searched
+  // variable by variable), so the classes are trained side by side on up to
+  // cv::getNumThreads () threads; each booster is deterministic, whatever its thread.
+  // progress is called on this thread as classes finish.
+  const auto trainClass = [&] (int c) {
+    // Binary responses: cv::ml::Boost maps the larger label to +1, so the margin is
+    // positive for class c.
+    cv::Mat responses (samples.rows, 1, CV_32S);
+    for (int i = 0; i < samples.rows; ++i)
+      responses.at<int> (i) = labels[static_cast<std::size_t> (i)] == c ? 1 : 0;
+    cv::Ptr<cv::ml::TrainData> data = cv::ml::TrainData::create (samples, cv::ml::ROW_SAMPLE, responses);
+    cv::Ptr<cv::ml::Boost> boost = cv::ml::Boost::create ();
+    boost->setBoostType (cv::ml::Boost::GENTLE);
+    boost->setWeakCount (params.weak_count);
+    boost->setWeightTrimRate (params.weight_trim_rate);
+    boost->setMaxDepth (1);
+    boost->setUseSurrogates (false);
+    boost->setCVFolds (0);
+    boost->setMinSampleCount (2);
+    boost->setRegressionAccuracy (0.f);
+    bool ok = false;
+    try
+    {
+      ok = boost->train (data);
+    }
+    catch (const cv::Exception &e)
+    {
+      throw std::runtime_error ("PatchClassifier::train: cv::ml::Boost failed for class " + std::to_string (c) + ": " +
+                                e.err);
+    }
+    if (!ok || !boost->isTrained ())
+      throw std::runtime_error ("PatchClassifier::train: cv::ml::Boost failed for class " + std::to_string (c));
+    return boost;
+  };
+
+  std::vector<cv::Ptr<cv::ml::Boost>> boosters (static_cast<std::size_t> (classes));
+  const int workers = std::max (1, std::min (classes, cv::getNumThreads ()));
+  if (workers == 1)
+  {
+    for (int c = 0; c < classes; ++c)
+    {
+      boosters[static_cast<std::size_t> (c)] = trainClass (c);
+      if (progress)
+        progress (c + 1, classes);
+    }
+  }
+  else
+  {
+    std::mutex mutex;
+    std::condition_variable changed;
+    int next = 0, finished = 0;
+    bool stop = false;
+    std::exception_ptr error;
+    const auto work = [&] () {
+      for (;;)
+      {
+        int c;
+        {
+          std::lock_guard<std::mutex> lock (mutex);
+          if (stop || next >= classes)
+            return;
+          c = next++;
+        }
+        cv::Ptr<cv::ml::Boost> boost;
+        std::exception_ptr failure;
+        try
+        {
+          boost = trainClass (c);
+        }
+        catch (...)
+        {
+          failure = std::current_exception ();
+        }
+        std::lock_guard<std::mutex> lock (mutex);
+        if (failure)
+        {
+          if (!error)
+            error = failure;
+          stop = true;
+        }
+        else
+          boosters[static_cast<std::size_t> (c)] = boost;
+        ++finished;
+        changed.notify_all ();
+      }
+    };
+    std::vector<std::thread> threads;
+    for (int t = 0; t < workers; ++t)
+      threads.emplace_back (work);
+    std::exception_ptr progress_error;
+    int reported = 0;
+    while (reported < classes && !progress_error)
+    {
+      int now;
+      {
+        std::unique_lock<std::mutex> lock (mutex);
+        changed.wait (lock, [&] { return finished > reported || stop; });
+        if (stop)
+          break;
+        now = finished;
+      }
+      while (reported < now && !progress_error)
+      {
+        ++reported;
+        if (!progress)
+          continue;
+        try
+        {
+          progress (reported, classes);
+        }
+        catch (...)
+        {
+          progress_error = std::current_exception ();
+          std::lock_guard<std::mutex> lock (mutex);
+          stop = true;
+        }
+      }
+    }
+    for (std::thread &t : threads)
+      t.join ();
+    if (error)
+      std::rethrow_exception (error);
+    if (progress_error)
+      std::rethrow_exception (progress_error);
+  }
+
+  PatchClassifier trained;
+  trained.dictionary_ = std::move (dictionary);
+  trained.boosters_ = std::move (boosters);
+  trained.geometry_.size = n;
+  trained.geometry_.extent = static_cast<float> (n) * pitch;
+  trained.geometry_.clamp = clamp;
+  trained.params_ = params;
+  try
+  {
+    trained.prepare ();
+  }
+  catch (const ModelError &e)
+  {
+    throw std::runtime_error (std::string ("PatchClassifier::train: unusable boosters: ") + e.what ());
+  }
+  *this = std::move (trained);
+}
+
+void
+PatchClassifier::prepare ()
+{
+  const int features = static_cast<int> (dictionary_.size ());
+  std::vector<ClassTrees> all;
+  std::vector<char> used (static_cast<std::size_t> (features), 0);
+  for (std::size_t c = 0; c < boosters_.size (); ++c)
+  {
+    const std::string where = "booster " + std::to_string (c) + ": ";
+    const cv::Ptr<cv::ml::Boost> &b = boosters_[c];
+    if (!b || !b->isTrained ())
+      throw ModelError (where + "not trained");
+    if (b->getVarCount () != features)
+      throw ModelError (where + "uses " + std::to_string (b->getVarCount ()) + " features, the dictionary has " +
+                        std::to_string (features));
+    const std::vector<int> &roots = b->getRoots ();
+    const std::vector<cv::ml::DTrees::Node> &nodes = b->getNodes ();
+    const std::vector<cv::ml::DTrees::Split> &splits = b->getSplits ();
+    if (roots.empty ())
+      throw ModelError (where + "no trees");
+    ClassTrees trees;
+    trees.roots = roots;
+    trees.nodes.resize (nodes.size ());
+    const int node_count = static_cast<int> (nodes.size ());
+    for (int i = 0; i < node_count; ++i)
+    {
+      const cv::ml::DTrees::Node &src = nodes[static_cast<std::size_t> (i)];
+      TreeNode &dst = trees.nodes[static_cast<std::size_t> (i)];
+      dst.value = src.value;
+      if (src.split < 0)
+        continue;
+      if (src.split >= static_cast<int> (splits.size ()))
+        throw ModelError (where + "a node refers to a missing split");
+      const cv::ml::DTrees::Split &split = splits[static_cast<std::size_t> (src.split)];
+      if (split.varIdx < 0 || split.varIdx >= features)
+        throw ModelError (where + "a split uses feature " + std::to_string (split.varIdx) + " of " +
+                          std::to_string (features));
+      if (src.left < 0 || src.left >= node_count || src.right < 0 || src.right >= node_count)
+        throw ModelError (where + "a split node without both children");
+      dst.feature = split.varIdx;
+      dst.threshold = split.c;
+      dst.left = src.left;
+      dst.right = src.right;
+    }
+    // Every root must reach leaves in fewer steps than there are nodes (no cycles).
+    for (int root : roots)
+    {
+      if (root < 0 || root >= node_count)
+        throw ModelError (where + "a tree without a root");
+      std::vector<int> stack{root};
+      int visits = 0;
+      while (!stack.empty ())
+      {
+        const int i = stack.back ();
+        stack.pop_back ();
+        if (++visits > node_count)
+          throw ModelError (where + "a tree is not a tree");
+        const TreeNode &node = trees.nodes[static_cast<std::size_t> (i)];
+        if (node.feature >= 0)
+        {
+          used[static_cast<std::size_t> (node.feature)] = 1;
+          stack.push_back (node.left);
+          stack.push_back (node.right);
+        }
+      }
+    }
+    // Every tree a stump (a split whose children are leaves)? Then a flat copy.
+    bool stumps = true;
+    for (int root : roots)
+    {
+      const TreeNode &node = trees.nodes[static_cast<std::size_t> (root)];
+      stumps = stumps && node.feature >= 0 && trees.nodes[static_cast<std::size_t> (node.left)].feature < 0 &&
+               trees.nodes[static_cast<std::size_t> (node.right)].feature < 0;
+    }
+    if (stumps)
+      for (int root : roots)
+      {
+        const TreeNode &node = trees.nodes[static_cast<std::size_t> (root)];
+        trees.stumps.push_back ({node.feature, node.threshold, trees.nodes[static_cast<std::size_t> (node.left)].value,
+                                 trees.nodes[static_cast<std::size_t> (node.right)].value});
+      }
+    all.push_back (std::move (trees));
+  }
+  std::vector<int> list;
+  for (int f = 0; f < features; ++f)
+    if (used[static_cast<std::size_t> (f)])
+      list.push_back (f);
+  trees_ = std::move (all);
+  used_fragments_ = std::move (list);
+}
+
+void
+PatchClassifier::classify (const agex::DepthPatch &patch, float *margins, float *confidences) const
+{
+  if (!trained ())
+    throw std::logic_error ("PatchClassifier::classify: the classifier is not trained");
+  if (patch.size != geometry_.size)
+    throw std::invalid_argument ("PatchClassifier::classify: patch size " + std::to_string (patch.size) +
+                                 ", the model was trained on " + std::to_string (geometry_.size));
+  float stack[kStackFeatures];
+  std::vector<float> heap;
+  float *features = stack;
+  if (dictionary_.size () > kStackFeatures)
+  {
+    heap.resize (dictionary_.size ());
+    features = heap.data ();
+  }
+  dictionary_.computeFeatures (patch, used_fragments_, features);
+  for (std::size_t c = 0; c < trees_.size (); ++c)
+  {
+    // cv::ml::DTreesImpl::predictTrees with PREDICT_SUM: trees in order, a double sum,
+    // "value <= threshold" goes left; the features are never cv::ml's missing value.
+    const ClassTrees &t = trees_[c];
+    double sum = 0.0;
+    if (!t.stumps.empty ())
+      for (const Stump &s : t.stumps)
+        sum += features[s.feature] <= s.threshold ? s.left : s.right;
+    else
+      for (int root : t.roots)
+      {
+        const TreeNode *node = &t.nodes[static_cast<std::size_t> (root)];
+        while (node->feature >= 0)
+          node = &t.nodes[static_cast<std::size_t> (features[node->feature] <= node->threshold ? node->left
+                                                                                               : node->right)];
+        sum += node->value;
+      }
+    const float margin = static_cast<float> (sum);
+    if (margins)
+      margins[c] = margin;
+    if (confidences)
+      confidences[c] = static_cast<float> (1.0 / (1.0 + std::exp (-2.0 * static_cast<double> (margin))));
+  }
+}
+
+void
+PatchClassifier::setPatchGeometry (const PatchGeometry &geometry)
+{
+  if (geometry.size != geometry_.size)
+    throw std::invalid_argument ("PatchClassifier::setPatchGeometry: size " + std::to_string (geometry.size) +
+                                 ", the model was trained on " + std::to_string (geometry_.size));
+  if (!(std::isfinite (geometry.extent) && geometry.extent > 0.f && std::isfinite (geometry.clamp) &&
+        geometry.clamp > 0.f))
+    throw std::invalid_argument ("PatchClassifier::setPatchGeometry: extent and clamp must be finite and positive");
+  geometry_ = geometry;
+}
+
+void
+PatchClassifier::save (const std::string &path, const nlohmann::json &metadata) const
+{
+  if (!trained ())
+    throw std::logic_error ("PatchClassifier::save: the classifier is not trained");
+  // ASCII only (non-ASCII escaped as \uXXXX), invalid UTF-8 replaced rather than thrown.
+  const std::string text = metadata.dump (-1, ' ', true, nlohmann::json::error_handler_t::replace);
+
+  cv::FileStorage fs (".yml", cv::FileStorage::WRITE | cv::FileStorage::MEMORY | cv::FileStorage::FORMAT_YAML);
+  fs.write ("format", std::string (kFormatName));
+  fs << "format_version" << kFormatVersion;
+  fs << "classes" << classes ();
+  fs << "patch" << "{";
+  fs << "size" << geometry_.size << "extent" << geometry_.extent << "clamp" << geometry_.clamp;
+  fs << "}";
+  fs << "training" << "{";
+  fs.write ("boost_type", std::string ("GentleAdaboost"));
+  fs << "weak_count" << params_.weak_count << "weight_trim_rate" << params_.weight_trim_rate << "max_depth" << 1;
+  fs << "}";
+  fs << "metadata" << "[";
+  for (std::size_t i = 0; i < text.size (); i += kMetadataChunk)
+    fs.write (cv::String (), kChunkFence + text.substr (i, kMetadataChunk) + kChunkFence);
+  fs << "]";
+  fs << "dictionary" << "{";
+  dictionary_.write (fs);
+  fs << "}";
+  fs << "boosters" << "[";
+  for (std::size_t c = 0; c < boosters_.size (); ++c)
+  {
+    fs << "{";
+    fs << "class" << static_cast<int> (c);
+    boosters_[c]->write (fs);
+    fs << "}";
+  }
+  fs << "]";
+  // Written last: a file cut anywhere before it is recognisably truncated.
+  fs.write ("end", std::string (kFormatName));
+  agex::writeFileAtomic (path, fs.releaseAndGetString ());
+}
+
+PatchClassifier
+PatchClassifier::load (const std::string &path)
+{
+  const std::string bytes = readWholeFile (path);
+  if (bytes.empty ())
+    throw ModelError (path + ": empty file, not an agex model");
+  if (bytes.compare (0, 5, "%YAML") != 0)
+    throw ModelError (path + ": not an agex model (not a YAML file)");
+
+  cv::FileStorage fs;
+  try
+  {
+    fs.open (bytes, cv::FileStorage::READ | cv::FileStorage::MEMORY | cv::FileStorage::FORMAT_YAML);
+  }
+  catch (const cv::Exception &e)
+  {
+    throw ModelError (path + ": damaged model file (truncated or not valid YAML: " + e.err + ")");
+  }
+  catch (const std::exception &e)
+  {
+    // OpenCV's parser lets a few standard exceptions through on damaged input.
+    throw ModelError (path + ": damaged model file (truncated or not valid YAML: " + e.what () + ")");
+  }
+  if (!fs.isOpened ())
+    throw ModelError (path + ": damaged model file (cannot be parsed)");
+
+  const cv::FileNode format = fs["format"];
+  if (format.empty () || !format.isString () || static_cast<std::string> (format) != kFormatName)
+    throw ModelError (path + ": not an agex model (no 'format: " + kFormatName + "')");
+  const cv::FileNode version = fs["format_version"];
+  if (version.empty () || !version.isInt ())
+    throw ModelError (path + ": damaged model file (missing or invalid format_version)");
+  if (static_cast<int> (version) != kFormatVersion)
+    throw ModelError (path + ": model format version " + std::to_string (static_cast<int> (version)) +
+                      " is not supported (this build reads " + std::to_string (kFormatVersion) + ")");
+  const cv::FileNode end = fs["end"];
+  if (end.empty () || !end.isString () || static_cast<std::string> (end) != kFormatName)
+    throw ModelError (path + ": damaged model file (truncated: no end marker)");
+
+  PatchClassifier model;
+  try
+  {
+    const int classes = readInt (fs.root (), "classes");
+    if (classes < 1)
+      throw ModelError ("classes must be at least 1");
+
+    const cv::FileNode patch = fs["patch"];
+    if (patch.empty () || !patch.isMap ())
+      throw ModelError ("missing 'patch'");
+    model.geometry_.size = readInt (patch, "size");
+    model.geometry_.extent = static_cast<float> (readReal (patch, "extent"));
+    model.geometry_.clamp = static_cast<float> (readReal (patch, "clamp"));
+    if (model.geometry_.size < 1 || model.geometry_.size > agex::DepthPatch::kMaxSize)
+      throw ModelError ("patch size " + std::to_string (model.geometry_.size) + " outside 1.." +
+                        std::to_string (agex::DepthPatch::kMaxSize));
+    if (!std::isfinite (model.geometry_.extent) || !std::isfinite (model.geometry_.clamp))
+      throw ModelError ("patch extent or clamp not finite");
+
+    const cv::FileNode training = fs["training"];
+    if (training.empty () || !training.isMap ())
+      throw ModelError ("missing 'training'");
+    model.params_.weak_count = readInt (training, "weak_count");
+    model.params_.weight_trim_rate = readReal (training, "weight_trim_rate");
+
+    const cv::FileNode meta = fs["metadata"];
+    if (meta.empty () || !meta.isSeq ())
+      throw ModelError ("missing 'metadata'");
+    std::string text;
+    for (cv::FileNodeIterator it = meta.begin (); it != meta.end (); ++it)
+    {
+      if (!(*it).isString ())
+        throw ModelError ("invalid metadata chunk");
+      const std::string chunk = static_cast<std::string> (*it);
+      if (chunk.size () < 2 || chunk.front () != kChunkFence || chunk.back () != kChunkFence)
+        throw ModelError ("invalid metadata chunk");
+      text.append (chunk, 1, chunk.size () - 2);
+    }
+    try
+    {
+      model.metadata_ = nlohmann::json::parse (text);
+    }
+    catch (const nlohmann::json::exception &e)
+    {
+      throw ModelError (std::string ("metadata is not JSON: ") + e.what ());
+    }
+
+    model.dictionary_.read (fs["dictionary"]);
+    if (model.dictionary_.patchSize () != model.geometry_.size)
+      throw ModelError ("the dictionary's patch size does not match the patch size");
+    if (model.dictionary_.size () == 0)
+      throw ModelError ("the dictionary is empty");
+    for (const Fragment &f : model.dictionary_.fragments ())
+      if (f.cls >= classes)
+        throw ModelError ("a fragment of class " + std::to_string (f.cls) + " in a " + std::to_string (classes) +
+                          "-class model");
+    model.params_.dictionary = model.dictionary_.params ();
+
+    const cv::FileNode boosters = fs["boosters"];
+    if (boosters.empty () || !boosters.isSeq () || static_cast<int> (boosters.size ()) != classes)
+      throw ModelError ("need " + std::to_string (classes) + " boosters");
+    const int features = static_cast<int> (model.dictionary_.size ());
+    int c = 0;
+    for (cv::FileNodeIterator it = boosters.begin (); it != boosters.end (); ++it, ++c)
+    {
+      const std::string where = "booster " + std::to_string (c) + ": ";
+      const cv::FileNode node = *it;
+      try
+      {
+        checkBoosterNode (node, features);
+        if (readInt (node, "class") != c)
+          throw ModelError ("boosters out of order");
+        cv::Ptr<cv::ml::Boost> boost = cv::ml::Boost::create ();
+        boost->read (node);
+        if (!boost->isTrained ())
+          throw ModelError ("fails to load");
+        model.boosters_.push_back (boost);
+      }
+      catch (const ModelError &e)
+      {
+        throw ModelError (where + e.what ());
+      }
+      catch (const cv::Exception &e)
+      {
+        throw ModelError (where + "fails to load (" + e.err + ")");
+      }
+    }
+    model.prepare ();
+  }
+  catch (const ModelError &e)
+  {
+    throw ModelError (path + ": damaged model file (" + e.what () + ")");
+  }
+  catch (const cv::Exception &e)
+  {
+    throw ModelError (path + ": damaged model file (" + e.err + ")");
+  }
+  catch (const std::exception &e)
+  {
+    throw ModelError (path + ": damaged model file (" + e.what () + ")");
+  }
+  return model;
+}
+}  // namespace agex

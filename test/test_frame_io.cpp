@@ -23,21 +23,6 @@ namespace
 {
 using namespace agex_test;
 
-std::string
-readAll (const std::string &path)
-{
-  std::ifstream in (path, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf ();
-  return s.str ();
-}
-
-void
-writeAll (const std::string &path, const std::string &bytes)
-{
-  std::ofstream out (path, std::ios::binary | std::ios::trunc);
-  out.write (bytes.data (), static_cast<std::streamsize> (bytes.size ()));
-}
 
 /** Runs f, expecting an agex::FrameError whose message contains every needle. */
 template <typename F>

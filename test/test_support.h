@@ -19,6 +19,8 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
+#include <sstream>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -32,6 +34,24 @@ namespace agex_test
 {
 namespace fs = std::filesystem;
 using Cloud = pcl::PointCloud<pcl::PointXYZ>;
+
+/** A whole file as bytes (empty if it cannot be read). */
+inline std::string
+readAll (const std::string &path)
+{
+  std::ifstream in (path, std::ios::binary);
+  std::stringstream s;
+  s << in.rdbuf ();
+  return s.str ();
+}
+
+/** Replaces a file's contents with bytes. */
+inline void
+writeAll (const std::string &path, const std::string &bytes)
+{
+  std::ofstream out (path, std::ios::binary | std::ios::trunc);
+  out.write (bytes.data (), static_cast<std::streamsize> (bytes.size ()));
+}
 
 /** Keeps the expected PCL_ERROR messages of bad-input tests out of the log. */
 class QuietPcl

@@ -32,21 +32,6 @@ namespace
 {
 using namespace agex_test;
 
-std::string
-readAll (const std::string &path)
-{
-  std::ifstream in (path, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf ();
-  return s.str ();
-}
-
-void
-writeAll (const std::string &path, const std::string &bytes)
-{
-  std::ofstream out (path, std::ios::binary | std::ios::trunc);
-  out.write (bytes.data (), static_cast<std::streamsize> (bytes.size ()));
-}
 
 // A three-joint chain with a different rotation order on each joint.
 const char *kChain = R"(HIERARCHY

@@ -95,6 +95,11 @@ main (int argc, char **argv)
       std::cerr << "  boosted class " << done << "/" << total << "\n";
     });
     const double seconds = std::chrono::duration<double> (std::chrono::steady_clock::now () - start).count ();
+    agex::PatchGeometry geometry;
+    geometry.size = patch.size;
+    geometry.extent = patch.extent;
+    geometry.clamp = patch.clamp;
+    classifier.setPatchGeometry (geometry);
 
     agex::apps::DetectorSettings settings;
     settings.pipeline = params;

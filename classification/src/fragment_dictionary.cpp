@@ -28,26 +28,29 @@ constexpr int kCutAttempts = 100;
 // ---------------------------------------------------------------------------------------
 // The feature kernel (fragment_kernel.inc), in 16-bit fixed point.
 //
-// The patch is quantised once: cells minus their mid-range, scaled so that the largest
-// magnitude is kPatchScale (8192), rounded. A fragment is quantised when the dictionary is
-// built or read: values times fragmentScale (size), rounded (at most 32767). Each fragment
-// row is packed as 32-bit words holding two neighbouring columns, and the patch as words
-// holding each cell with its right neighbour, so one pmaddwd multiplies two columns for a
-// whole vector of window positions and adds them in 32-bit lanes. Integer sums are exact,
-// and the scaling keeps every sum below 2^31 (Cauchy-Schwarz: |sum| <= |f| |p| <=
-// fragmentScale x 1.0 x kPatchScale x size).
+// The patch is quantised once per call: cells minus their mid-range, scaled so that the
+// largest magnitude is kPatchScale (7200), rounded. A fragment is quantised when the
+// dictionary is built or read: values times fragmentScale (size), rounded. Each fragment row
+// is packed as 32-bit words holding two neighbouring columns, and the patch as words holding
+// each cell with its right neighbour, so one pmaddwd multiplies two columns for a whole
+// vector of window positions and adds them in 32-bit lanes. Integer sums are exact, and the
+// scales keep every sum below 2^31 (Cauchy-Schwarz: |sum| <= |f| |p| <= fragmentScale x 1
+// x kPatchScale x size).
 //
-// Per position, with double integral images of the quantised patch (exact integers) and
-// the fragment's sum and sum of squares, the Pearson correlation of the two quantised
-// pieces is cov / sqrt(var_p var_f) with area x cov, area x var exact in double. The best
-// signed square cov |cov| / var_p is kept per lane (in float), one square root at the end.
-// A flat window (var_p exactly 0) correlates 0.
+// Per position, with integral images of the quantised patch (int32 sums, int64 sums of
+// squares) and the fragment's sum and sum of squares, the Pearson correlation of the two
+// quantised pieces is cov / sqrt (var_p var_f); area x var_p is computed exactly (integers
+// below 2^53, in double), so a flat window (var_p = 0) is recognised exactly and correlates
+// 0; area x cov is computed in float. The best signed square cov |cov| / var_p is kept per
+// lane, one square root at the end.
 //
 // Kernels: "avx-vnni" (8 positions per vector, fused dot-product-and-add), "avx2" (8
-// positions, pmaddwd then add), "sse2" (4 positions) on x86-64 with GCC, chosen at run time,
-// and "generic" (plain C++, one position at a time) everywhere. All give the same bits.
-constexpr int kPad = 8;               ///< words / doubles after each row: the widest load is 8
-constexpr double kPatchScale = 8192;  ///< largest |quantised patch cell|
+// positions, pmaddwd then add), "sse2" (4 positions) on x86-64 with GCC, chosen at run
+// time, and "generic" (plain C++, one position at a time) everywhere. They perform the same
+// IEEE operations in the same order (no fused multiply-adds: -ffp-contract=off), so they
+// give the same bits.
+constexpr int kPad = 8;               ///< padding after each row / array: the widest load is 8
+constexpr double kPatchScale = 7200;  ///< largest |quantised patch cell| (41 x 7200^2 < 2^31)
 
 /** Fixed-point scale of a size x size fragment: sums stay below 0.99 x 2^31. */
 int
@@ -68,98 +71,167 @@ roundToInt (double v)
 using Packed = FragmentDictionary::Packed;
 
 /** The patch, quantised and packed in pairs (words[r * stride + x] holds cells x and x + 1
-  * of row r, 0 beyond the row), with double integral images of the quantised cells and of
-  * their squares: sum[(y) * (n + 1) + x] = sum of cells above y and left of x. */
+  * of row r, 0 beyond the row), with integral images of the quantised cells (int32) and of
+  * their squares (int64): sum[y * (n + 1) + x] = sum of the cells above y and left of x. */
 struct Prepared
 {
   int n = 0;
   int stride = 0;  ///< words per padded row
   std::int32_t pairs[kMaxSize * (kMaxSize + kPad)];
-  double sum[(kMaxSize + 1) * (kMaxSize + 1) + kPad];
-  double sq[(kMaxSize + 1) * (kMaxSize + 1) + kPad];
+  std::int32_t sum[(kMaxSize + 1) * (kMaxSize + 1) + kPad];
+  std::int64_t sq[(kMaxSize + 1) * (kMaxSize + 1) + kPad];
 
   void prepare (const agex::DepthPatch &patch)
   {
     n = patch.size;
     stride = n + kPad;
+    // Locals only below: stores into the member arrays could alias members as far as the
+    // compiler knows, which would keep the loops from vectorising.
+    const int n = patch.size, stride = n + kPad;
     const int cells = n * n, w = n + 1;
+    std::int32_t *const pairs = this->pairs;
+    std::int32_t *const sum = this->sum;
+    std::int64_t *const sq = this->sq;
+
     // Mid-range and scale of the finite cells; a non-finite cell reads as the largest
-    // finite one (the background side).
-    float lo = std::numeric_limits<float>::infinity (), hi = -lo;
-    for (int i = 0; i < cells; ++i)
-    {
-      const float v = patch.patch[i];
-      lo = v < lo ? v : lo;
-      hi = v > hi ? v : hi;
-    }
+    // finite one.
+    float lo, hi;
+    extremes (patch.patch, cells, lo, hi);
     if (!(hi >= lo))  // no finite cell
       lo = hi = 0.f;
     const double mid = 0.5 * (static_cast<double> (lo) + static_cast<double> (hi));
     const double range = 0.5 * (static_cast<double> (hi) - static_cast<double> (lo));
     const double scale = range > 0.0 ? kPatchScale / range : 0.0;
-    std::int16_t q[kMaxSize * kMaxSize + 1];
+    // Quantised cells, |q| <= 7200: floor ((v - mid) scale + 0.5) in float (plenty for
+    // integers up to 7200; int32 here so that the loop vectorises).
+    std::int32_t q[kMaxSize * kMaxSize];
+    const float fill = hi, fmid = static_cast<float> (mid), fscale = static_cast<float> (scale);
     for (int i = 0; i < cells; ++i)
     {
       const float v = patch.patch[i];
-      const double d = std::isfinite (v) ? static_cast<double> (v) : static_cast<double> (hi);
-      q[i] = static_cast<std::int16_t> (roundToInt ((d - mid) * scale));  // |.| <= 8192
+      const float d = std::fabs (v) <= std::numeric_limits<float>::max () ? v : fill;  // NaN, +-inf: fill
+      q[i] = static_cast<std::int32_t> ((d - fmid) * fscale + 16384.5f) - 16384;
     }
     for (int r = 0; r < n; ++r)
     {
-      std::int32_t *row = pairs + r * stride;
-      const std::int16_t *src = q + r * n;
-      for (int c = 0; c < n; ++c)
-      {
-        const std::uint32_t a = static_cast<std::uint16_t> (src[c]);
-        const std::uint32_t b = c + 1 < n ? static_cast<std::uint16_t> (src[c + 1]) : 0u;
-        row[c] = static_cast<std::int32_t> (a | (b << 16));
-      }
+      std::int32_t *__restrict row = pairs + r * stride;
+      const std::int32_t *__restrict src = q + r * n;
+      for (int c = 0; c + 1 < n; ++c)
+        row[c] = static_cast<std::int32_t> ((static_cast<std::uint32_t> (src[c]) & 0xffffu) |
+                                            (static_cast<std::uint32_t> (src[c + 1]) << 16));
+      row[n - 1] = static_cast<std::int32_t> (static_cast<std::uint32_t> (src[n - 1]) & 0xffffu);
       for (int c = n; c < stride; ++c)
         row[c] = 0;
     }
-    // Integral images: row prefix sums four rows at a time (independent chains), then
-    // down the columns.
+    // Integral images: row prefix sums (a row of squares stays below 41 x 7200^2 < 2^31),
+    // four rows at a time (independent chains), into rows 1..n; then down the columns.
     for (int x = 0; x < w; ++x)
-      sum[x] = sq[x] = 0.0;
+    {
+      sum[x] = 0;
+      sq[x] = 0;
+    }
     int r = 0;
     for (; r + 4 <= n; r += 4)
     {
-      double rs[4] = {0, 0, 0, 0}, rq[4] = {0, 0, 0, 0};
+      std::int32_t a[4] = {0, 0, 0, 0}, b[4] = {0, 0, 0, 0};
       for (int j = 0; j < 4; ++j)
-        sum[(r + j + 1) * w] = sq[(r + j + 1) * w] = 0.0;
+      {
+        sum[(r + j + 1) * w] = 0;
+        sq[(r + j + 1) * w] = 0;
+      }
       for (int c = 0; c < n; ++c)
         for (int j = 0; j < 4; ++j)
         {
-          const double v = q[(r + j) * n + c];
-          rs[j] += v;
-          rq[j] += v * v;
-          sum[(r + j + 1) * w + c + 1] = rs[j];
-          sq[(r + j + 1) * w + c + 1] = rq[j];
+          const std::int32_t v = q[(r + j) * n + c];
+          a[j] += v;
+          b[j] += v * v;
+          sum[(r + j + 1) * w + c + 1] = a[j];
+          sq[(r + j + 1) * w + c + 1] = b[j];
         }
     }
     for (; r < n; ++r)
     {
-      double rs = 0.0, rq = 0.0;
-      sum[(r + 1) * w] = sq[(r + 1) * w] = 0.0;
+      std::int32_t a = 0, b = 0;
+      sum[(r + 1) * w] = 0;
+      sq[(r + 1) * w] = 0;
       for (int c = 0; c < n; ++c)
       {
-        const double v = q[r * n + c];
-        rs += v;
-        rq += v * v;
-        sum[(r + 1) * w + c + 1] = rs;
-        sq[(r + 1) * w + c + 1] = rq;
+        const std::int32_t v = q[r * n + c];
+        a += v;
+        b += v * v;
+        sum[(r + 1) * w + c + 1] = a;
+        sq[(r + 1) * w + c + 1] = b;
       }
     }
     for (int y = 2; y <= n; ++y)
-      for (int x = 1; x < w; ++x)
+    {
+      std::int32_t *__restrict cs = sum + y * w;
+      std::int64_t *__restrict cq = sq + y * w;
+      const std::int32_t *__restrict ps = cs - w;
+      const std::int64_t *__restrict pq = cq - w;
+      for (int x = 0; x < w; ++x)
       {
-        sum[y * w + x] += sum[(y - 1) * w + x];
-        sq[y * w + x] += sq[(y - 1) * w + x];
+        cs[x] += ps[x];
+        cq[x] += pq[x];
       }
+    }
     for (int i = 0; i < kPad; ++i)
-      sum[w * w + i] = sq[w * w + i] = 0.0;
+    {
+      sum[w * w + i] = 0;
+      sq[w * w + i] = 0;
+    }
+  }
+
+  /** Smallest and largest finite value (+inf / -inf if none). */
+  static void extremes (const float *v, int count, float &lo, float &hi)
+  {
+    constexpr float inf = std::numeric_limits<float>::infinity ();
+    int i = 0;
+    lo = inf;
+    hi = -inf;
+#if defined(__GNUC__) && !defined(__clang__)
+    typedef float V4 __attribute__ ((vector_size (16)));
+    V4 l = inf - V4{}, h = -inf - V4{};
+    for (; i + 4 <= count; i += 4)
+    {
+      V4 x;
+      std::memcpy (&x, v + i, sizeof x);
+      l = x < l ? x : l;  // NaN compares false: ignored; -inf/+inf are not taken below
+      h = x > h ? x : h;
+    }
+    for (int j = 0; j < 4; ++j)
+    {
+      lo = l[j] < lo ? l[j] : lo;
+      hi = h[j] > hi ? h[j] : hi;
+    }
+#endif
+    for (; i < count; ++i)
+    {
+      lo = v[i] < lo ? v[i] : lo;
+      hi = v[i] > hi ? v[i] : hi;
+    }
+    // Infinite cells are not finite: recompute without them if there are any.
+    if (lo == -inf || hi == inf)
+    {
+      lo = inf;
+      hi = -inf;
+      for (i = 0; i < count; ++i)
+        if (std::fabs (v[i]) <= std::numeric_limits<float>::max ())
+        {
+          lo = v[i] < lo ? v[i] : lo;
+          hi = v[i] > hi ? v[i] : hi;
+        }
+    }
   }
 };
+
+/** Exact conversion of integers in [0, 2^52) to double (the vector kernels convert int64
+  * with the same arithmetic, see fragment_kernel.inc). */
+inline double
+exactDouble (std::int64_t v)
+{
+  return static_cast<double> (v);
+}
 
 /** The feature from the best lane score m (signed square, times the fragment's norm). */
 inline float
@@ -195,10 +267,12 @@ fragmentFeature (const Prepared &p, const Packed &f, const Fragment &g)
           num += static_cast<std::int16_t> (a & 0xffff) * static_cast<std::int16_t> (b & 0xffff) +
                  static_cast<std::int16_t> (a >> 16) * static_cast<std::int16_t> (b >> 16);
         }
-      const double *s0 = p.sum + py * iw + px, *s1 = s0 + s * iw;
-      const double *q0 = p.sq + py * iw + px, *q1 = q0 + s * iw;
-      const double sm = s1[s] - s1[0] - s0[s] + s0[0], sq = q1[s] - q1[0] - q0[s] + q0[0];
-      const float cf = static_cast<float> (area * static_cast<double> (num) - f.sum * sm);
+      const std::int32_t *s0 = p.sum + py * iw + px, *s1 = s0 + s * iw;
+      const std::int64_t *q0 = p.sq + py * iw + px, *q1 = q0 + s * iw;
+      const double sm = static_cast<double> (s1[s] - s1[0] - s0[s] + s0[0]);
+      const double sq = exactDouble (q1[s] - q1[0] - q0[s] + q0[0]);
+      const float cf = static_cast<float> (area) * static_cast<float> (num) -
+                       static_cast<float> (f.sum) * static_cast<float> (s1[s] - s1[0] - s0[s] + s0[0]);
       const float vf = static_cast<float> (area * sq - sm * sm);
       const float score = vf <= 0.f ? 0.f : cf * (cf < 0.f ? -cf : cf) / vf;
       best = score > best ? score : best;
@@ -235,8 +309,8 @@ typedef int VecI __attribute__ ((vector_size (16)));
 typedef std::int32_t VecHI __attribute__ ((vector_size (8)));
 typedef double VecHD __attribute__ ((vector_size (16)));
 typedef float VecHF __attribute__ ((vector_size (8)));
+typedef std::int64_t VecHL __attribute__ ((vector_size (16)));
 #define AGEX_DOT(acc, q, f) ((acc) + (VecI32) _mm_madd_epi16 ((__m128i) (q), (__m128i) (f)))
-#define AGEX_DOT_CHAINS 1
 #define AGEX_MAX_ROWS 4
 #define AGEX_LOW(v) __builtin_shufflevector (v, v, 0, 1)
 #define AGEX_HIGH(v) __builtin_shufflevector (v, v, 2, 3)
@@ -246,7 +320,6 @@ typedef float VecHF __attribute__ ((vector_size (8)));
 #undef AGEX_HIGH
 #undef AGEX_LOW
 #undef AGEX_MAX_ROWS
-#undef AGEX_DOT_CHAINS
 #undef AGEX_DOT
 }  // namespace kernel_sse2
 
@@ -261,8 +334,8 @@ typedef int VecI __attribute__ ((vector_size (32)));
 typedef std::int32_t VecHI __attribute__ ((vector_size (16)));
 typedef double VecHD __attribute__ ((vector_size (32)));
 typedef float VecHF __attribute__ ((vector_size (16)));
+typedef std::int64_t VecHL __attribute__ ((vector_size (32)));
 #define AGEX_DOT(acc, q, f) ((acc) + (VecI32) _mm256_madd_epi16 ((__m256i) (q), (__m256i) (f)))
-#define AGEX_DOT_CHAINS 1
 #define AGEX_MAX_ROWS 8
 #define AGEX_LOW(v) __builtin_shufflevector (v, v, 0, 1, 2, 3)
 #define AGEX_HIGH(v) __builtin_shufflevector (v, v, 4, 5, 6, 7)
@@ -272,7 +345,6 @@ typedef float VecHF __attribute__ ((vector_size (16)));
 #undef AGEX_HIGH
 #undef AGEX_LOW
 #undef AGEX_MAX_ROWS
-#undef AGEX_DOT_CHAINS
 #undef AGEX_DOT
 }  // namespace kernel_avx2
 #pragma GCC pop_options
@@ -288,11 +360,9 @@ typedef int VecI __attribute__ ((vector_size (32)));
 typedef std::int32_t VecHI __attribute__ ((vector_size (16)));
 typedef double VecHD __attribute__ ((vector_size (32)));
 typedef float VecHF __attribute__ ((vector_size (16)));
-// vpdpwssd has a long latency: two chains per window row keep the unit busy (7 rows x 2
-// accumulators fit the 16 registers with the fragment and patch operands).
+typedef std::int64_t VecHL __attribute__ ((vector_size (32)));
 #define AGEX_DOT(acc, q, f) ((VecI32) _mm256_dpwssd_avx_epi32 ((__m256i) (acc), (__m256i) (q), (__m256i) (f)))
-#define AGEX_DOT_CHAINS 2
-#define AGEX_MAX_ROWS 7
+#define AGEX_MAX_ROWS 8
 #define AGEX_LOW(v) __builtin_shufflevector (v, v, 0, 1, 2, 3)
 #define AGEX_HIGH(v) __builtin_shufflevector (v, v, 4, 5, 6, 7)
 #define AGEX_CONCAT(a, b) __builtin_shufflevector (a, b, 0, 1, 2, 3, 4, 5, 6, 7)
@@ -301,7 +371,6 @@ typedef float VecHF __attribute__ ((vector_size (16)));
 #undef AGEX_HIGH
 #undef AGEX_LOW
 #undef AGEX_MAX_ROWS
-#undef AGEX_DOT_CHAINS
 #undef AGEX_DOT
 }  // namespace kernel_vnni
 #pragma GCC pop_options

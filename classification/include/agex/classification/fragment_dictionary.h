@@ -45,8 +45,14 @@ struct Fragment
   * of the normalised cross-correlation (Pearson correlation) of the fragment with the
   * patch cells under it. It lies in [-1, 1]: 1 for an exact copy (up to an offset and a
   * positive scale) anywhere in the window, -1 for a negated copy when that is the best
-  * the window offers. A flat (zero-variance) piece of the patch correlates 0 with every
-  * fragment (relative variance below 1e-9 counts as flat).
+  * the window offers. A flat piece of the patch correlates 0 with every fragment, and an
+  * all-zero fragment with every patch.
+  *
+  * The correlation is computed in 16-bit fixed point (the patch scaled to +-7200 around
+  * its mid-range, the unit-norm fragment by up to 32767; see doc/classifier.md) with exact
+  * integer sums: it is within about 1e-4 of the real-valued correlation (within 1e-6 for
+  * exact copies), "flat" means flat after quantisation, and the features are bit for bit
+  * the same on every machine and with every kernel (availableKernels).
   *
   * Thread safety: computeFeatures is const and keeps its scratch space on the stack, so
   * one dictionary may serve many threads.
@@ -103,8 +109,8 @@ public:
     *         is left unchanged then */
   void read (const cv::FileNode &node);
 
-  /** A fragment as the feature kernel uses it: values in 16-bit fixed point, packed in
-    * pairs of neighbouring columns (see doc/classifier.md). */
+  /** Implementation detail: a fragment as the feature kernels use it, values in 16-bit
+    * fixed point packed in pairs of neighbouring columns (see fragment_dictionary.cpp). */
   struct Packed
   {
     int size = 0, pairs = 0;              ///< side, pairs per row (size + 1) / 2

@@ -1,5 +1,7 @@
 #include <agex/classification/fragment_dictionary.h>
 
+#include "checked_read.h"
+
 #include <opencv2/core.hpp>
 
 #include <algorithm>
@@ -427,25 +429,8 @@ computeDispatch (const Prepared &p, const std::vector<Packed> &packed, const std
   }
 }
 
-// ---------------------------------------------------------------------------------------
-// Reading helpers: every field is checked for presence and type.
-int
-readInt (const cv::FileNode &node, const char *name)
-{
-  const cv::FileNode n = node[name];
-  if (n.empty () || !n.isInt ())
-    throw ModelError (std::string ("missing or invalid integer '") + name + "'");
-  return static_cast<int> (n);
-}
-
-std::string
-readString (const cv::FileNode &node, const char *name)
-{
-  const cv::FileNode n = node[name];
-  if (n.empty () || !n.isString ())
-    throw ModelError (std::string ("missing or invalid string '") + name + "'");
-  return static_cast<std::string> (n);
-}
+using detail::readInt;
+using detail::readString;
 }  // namespace
 
 void

@@ -2,6 +2,8 @@
 
 #include <agex/common/atomic_file.h>
 
+#include "checked_read.h"
+
 #include <opencv2/core/utility.hpp>
 
 #include <algorithm>
@@ -31,23 +33,10 @@ constexpr char kChunkFence = '|';
 /** classify () keeps features on the stack up to this many fragments. */
 constexpr std::size_t kStackFeatures = 2048;
 
-int
-readInt (const cv::FileNode &node, const char *name)
-{
-  const cv::FileNode n = node[name];
-  if (n.empty () || !n.isInt ())
-    throw ModelError (std::string ("missing or invalid integer '") + name + "'");
-  return static_cast<int> (n);
-}
+using detail::readInt;
+using detail::readReal;
 
-double
-readReal (const cv::FileNode &node, const char *name)
-{
-  const cv::FileNode n = node[name];
-  if (n.empty () || !(n.isReal () || n.isInt ()))
-    throw ModelError (std::string ("missing or invalid number '") + name + "'");
-  return static_cast<double> (n);
-}
+
 
 /** Checks the parts of a booster node that cv::ml reads without checking (it indexes
   * arrays with them), so that a damaged file fails here instead of in OpenCV. */

@@ -1060,6 +1060,39 @@ TEST_F (BodyPartApps, EvalDetectReportsAveragePrecision)
   EXPECT_TRUE (fs::exists (tmp_.file ("plots") + "/precision_recall.png"));
 }
 
+TEST_F (BodyPartApps, BenchDatasetReportsStagesAndThroughput)
+{
+  const std::string json = tmp_.file ("bench.json");
+  ASSERT_EQ (run (quoted (AGEX_BENCH_EXECUTABLE) + " --dataset " + quoted (dataset ()) + " --keyframes --model " +
+                  quoted (model ()) + " --passes 1 --jobs 2 --json " + quoted (json) + " >> " + quoted (log ()) +
+                  " 2>&1"),
+             0)
+      << readText (log ());
+  const auto doc = nlohmann::json::parse (readText (json));
+  EXPECT_EQ (doc.at ("frames").get<int> (), 11);
+  const double median = doc.at ("ms_per_frame").at ("median").get<double> ();
+  EXPECT_GT (median, 0.0);
+  EXPECT_GE (doc["ms_per_frame"].at ("p95").get<double> (), median);
+  // Every stage from the cropped frame to the classifier is timed, and none exceeds the whole.
+  double stage_sum = 0;
+  for (const char *stage : {"crop", "mixed_pixels", "denoise", "floor", "spurs", "segmentation", "agex", "patches",
+                            "classify"})
+  {
+    ASSERT_TRUE (doc.at ("stages").contains (stage)) << stage;
+    const double ms = doc["stages"][stage].at ("median").get<double> ();
+    EXPECT_GE (ms, 0.0) << stage;
+    stage_sum += ms;
+  }
+  EXPECT_GT (stage_sum, 0.0);
+  EXPECT_EQ (doc.at ("throughput").at ("jobs").get<int> (), 2);
+  EXPECT_GT (doc["throughput"].at ("frames_per_second").get<double> (), 0.0);
+
+  // Frame files and --dataset together are refused.
+  EXPECT_NE (run (quoted (AGEX_BENCH_EXECUTABLE) + " --dataset " + quoted (dataset ()) + " " +
+                  quoted (AGEX_SOURCE_DIR "/data/frames/bonn_1_002.png") + " >> " + quoted (log ()) + " 2>&1"),
+             0);
+}
+
 TEST_F (BodyPartApps, DamagedModelIsAClearError)
 {
   const std::string damaged = tmp_.file ("damaged.yml");

@@ -25,8 +25,9 @@ namespace po = boost::program_options;
 namespace
 {
 int
-evaluateCoverage (const agex::Dataset &dataset, agex::apps::PipelineParams params, int k, float radius,
-                  bool keyframes_only, bool details, const std::string &json_path, const std::string &plot_path)
+evaluateCoverage (const agex::apps::DatasetSelection &selection, agex::apps::PipelineParams params, int k,
+                  float radius, bool keyframes_only, bool details, const std::string &json_path,
+                  const std::string &plot_path)
 {
   constexpr int kCurveMax = 20;
   const int max_k = std::max (k, kCurveMax);
@@ -34,10 +35,8 @@ evaluateCoverage (const agex::Dataset &dataset, agex::apps::PipelineParams param
   agex::apps::CoverageEvaluation evaluation (max_k, radius);
   evaluation.setDetailK (k);
 
-  std::vector<std::string> ids;
-  for (const auto &frame : dataset.frames ())
-    if (!keyframes_only || dataset.isKeyframe (frame.id))
-      ids.push_back (frame.id);
+  const agex::Dataset &dataset = selection.dataset;
+  const std::vector<std::string> &ids = selection.frame_ids;
   agex::apps::Progress progress ("evaluated", ids.size ());
   double total_ms = 0.0;
   std::size_t meshes = 0;
@@ -201,12 +200,15 @@ main (int argc, char **argv)
     if (mode == "detect")
       return evaluateDetection (agex::apps::selectDataset (dataset_dir, keyframes), model_path, radius, json_path,
                                 plots_dir);
-    const agex::Dataset dataset = agex::Dataset::read (dataset_dir);
-    for (const auto &out : {json_path, plot_path})
-      if (!out.empty ())
-        agex::checkOutputIsNotInput (out, {dataset_dir + "/dataset.json", dataset_dir + "/labels.csv"});
     if (mode == "coverage")
-      return evaluateCoverage (dataset, params, k, radius, keyframes, details, json_path, plot_path);
+    {
+      const agex::apps::DatasetSelection selection = agex::apps::selectDataset (dataset_dir, keyframes);
+      const std::string &dir = selection.dataset.directory ();
+      for (const auto &out : {json_path, plot_path})
+        if (!out.empty ())
+          agex::checkOutputIsNotInput (out, {dir + "/dataset.json", dir + "/labels.csv"});
+      return evaluateCoverage (selection, params, k, radius, keyframes, details, json_path, plot_path);
+    }
     throw std::runtime_error ("unknown mode '" + mode + "' (expected coverage or detect)");
   }
   catch (const std::exception &e)

@@ -1,5 +1,5 @@
 // agex_eval: evaluations on labelled agex datasets.
-//   agex_eval coverage --dataset DIR --k K --radius R [--keyframes] --json FILE [--plot FILE.png]
+//   agex_eval coverage --dataset DIR[@SEQ,...] --k K --radius R [--keyframes] --json FILE [--plot FILE.png]
 // coverage: how often each labelled body part is among the first k AGEX points.
 
 #include <agex/apps/body_parts.h>

@@ -139,16 +139,36 @@ TEST (BoxOverlap, DetectionEvaluationMatchesByOverlap)
   EXPECT_DOUBLE_EQ (by_distance.averagePrecision (agex::BodyPart::Head), 1.0);
 }
 
+TEST (DetectorKind, StoredInTheSettingsAndChecked)
+{
+  agex::apps::DetectorSettings settings;
+  settings.detector = agex::apps::DetectorKind::SlidingWindow;
+  settings.sliding_window.stride = 2;
+  settings.sliding_window.scales = {0.8f, 1.25f};
+  nlohmann::json doc = settings.toJson ();
+  const auto read = agex::apps::DetectorSettings::fromJson (doc);
+  EXPECT_EQ (read.detector, agex::apps::DetectorKind::SlidingWindow);
+  EXPECT_EQ (read.sliding_window.stride, 2);
+  EXPECT_EQ (read.sliding_window.scales, (std::vector<float>{0.8f, 1.25f}));
+  EXPECT_NO_THROW (read.requireDetector (agex::apps::DetectorKind::SlidingWindow, "sw.yml"));
+  try
+  {
+    read.requireDetector (agex::apps::DetectorKind::Agex, "sw.yml");
+    ADD_FAILURE () << "a sliding-window model passed for an AGEX one";
+  }
+  catch (const std::runtime_error &e)
+  {
+    EXPECT_NE (std::string (e.what ()).find ("sw.yml: a sliding_window model"), std::string::npos) << e.what ();
+  }
+  // Models written before the field existed are AGEX models; an unknown kind is an error.
+  doc.erase ("detector");
+  EXPECT_EQ (agex::apps::DetectorSettings::fromJson (doc).detector, agex::apps::DetectorKind::Agex);
+  doc["detector"] = "cascade";
+  EXPECT_THROW (agex::apps::DetectorSettings::fromJson (doc), std::runtime_error);
+}
+
 // A figure with one arm pointing up: the arm's tip is the part to find.
-const Camera kCamera = [] {
-  Camera c;
-  c.fx = c.fy = 100.0;
-  c.width = 80;
-  c.height = 60;
-  c.cx = 39.5;
-  c.cy = 29.5;
-  return c;
-}();
+const Camera kCamera{100.0, 100.0, 39.5, 29.5, 80, 60};  // fx, fy, cx, cy, width, height
 
 Figure
 figureAt (double x, double y, double depth)

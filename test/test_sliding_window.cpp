@@ -158,7 +158,7 @@ TEST (DetectorKind, StoredInTheSettingsAndChecked)
   }
   catch (const std::runtime_error &e)
   {
-    EXPECT_NE (std::string (e.what ()).find ("sw.yml: a sliding_window model"), std::string::npos) << e.what ();
+    EXPECT_NE (std::string (e.what ()).find ("sw.yml is a sliding-window model, but an AGEX model is needed"), std::string::npos) << e.what ();
   }
   // Models written before the field existed are AGEX models; an unknown kind is an error.
   doc.erase ("detector");

@@ -126,9 +126,12 @@ detectorKindName (DetectorKind kind)
 void
 DetectorSettings::requireDetector (DetectorKind expected, const std::string &model_path) const
 {
+  auto described = [] (DetectorKind kind) {
+    return std::string (kind == DetectorKind::Agex ? "an AGEX model" : "a sliding-window model");
+  };
   if (detector != expected)
-    throw std::runtime_error (model_path + ": a " + detectorKindName (detector) + " model, but a " +
-                              detectorKindName (expected) + " model is needed here" +
+    throw std::runtime_error (model_path + " is " + described (detector) + ", but " + described (expected) +
+                              " is needed here" +
                               (expected == DetectorKind::Agex ? " (train one with agex_train without --sliding-window)"
                                                               : " (train one with agex_train --sliding-window)"));
 }

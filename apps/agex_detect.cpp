@@ -8,6 +8,7 @@
 #include <agex/apps/command_line.h>
 #include <agex/apps/depth_pipeline.h>
 #include <agex/apps/output.h>
+#include <agex/apps/sliding_window.h>
 #include <agex/classification/patch_classifier.h>
 #include <agex/common/atomic_file.h>
 #include <agex/common/dataset.h>
@@ -160,8 +161,9 @@ main (int argc, char **argv)
       throw std::runtime_error ("no INPUT given (see --help)");
     if (jobs < 1)
       throw std::runtime_error ("--jobs must be at least 1");
-    const agex::PatchClassifier classifier = agex::PatchClassifier::load (model_path);
-    const agex::apps::DetectorSettings settings = agex::apps::DetectorSettings::fromJson (classifier.metadata ());
+    const agex::apps::DetectorModel model = agex::apps::loadDetectorModel (model_path, agex::apps::DetectorKind::Agex);
+    const agex::PatchClassifier &classifier = *model.classifier;
+    const agex::apps::DetectorSettings &settings = model.settings;
     const std::vector<Job> job_list = collectJobs (inputs);
     std::vector<std::string> input_files;
     for (const auto &j : job_list)

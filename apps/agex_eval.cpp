@@ -1,6 +1,10 @@
 // agex_eval: evaluations on labelled agex datasets.
 //   agex_eval coverage --dataset DIR[@SEQ,...] --k K --radius R [--keyframes] --json FILE [--plot FILE.png]
+//   agex_eval detect --dataset DIR[@SEQ,...] [--model M] [--json FILE] [--plots DIR]
+//   agex_eval compare --dataset DIR[@SEQ,...] [--model-agex M] [--model-sw M] [--json FILE] [--plots DIR]
 // coverage: how often each labelled body part is among the first k AGEX points.
+// detect: precision and recall of the body-part detector.
+// compare: the AGEX detector against the sliding-window baseline (the paper's Fig. 7).
 
 #include <agex/apps/body_parts.h>
 #include <agex/apps/command_line.h>
@@ -8,6 +12,7 @@
 #include <agex/apps/coverage.h>
 #include <agex/apps/depth_pipeline.h>
 #include <agex/apps/output.h>
+#include <agex/apps/sliding_window.h>
 #include <agex/common/atomic_file.h>
 #include <agex/classification/patch_classifier.h>
 #include <agex/common/dataset.h>
@@ -18,6 +23,8 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
+#include <cstdio>
 #include <iostream>
 
 namespace po = boost::program_options;
@@ -93,12 +100,41 @@ evaluateCoverage (const agex::apps::DatasetSelection &selection, agex::apps::Pip
   }
   return 0;
 }
+/** Adds the precision-recall curve of one class to a plot. */
+void
+addPrecisionRecall (agex::apps::Plot &plot, const agex::apps::DetectionEvaluation &evaluation, agex::BodyPart part,
+                    const std::string &label, const cv::Scalar &colour)
+{
+  char name[96];
+  std::snprintf (name, sizeof name, "%s AP %.2f", label.c_str (), evaluation.averagePrecision (part));
+  agex::apps::Plot::Series series{name, colour, {}};
+  for (const auto &[recall, precision] : evaluation.precisionRecall (part))
+    series.points.emplace_back (recall, precision);
+  plot.series.push_back (series);
+}
+
+double
+msSince (std::chrono::steady_clock::time_point start)
+{
+  return std::chrono::duration<double, std::milli> (std::chrono::steady_clock::now () - start).count ();
+}
+
+double
+median (std::vector<double> v)
+{
+  if (v.empty ())
+    return 0.0;
+  std::sort (v.begin (), v.end ());
+  return v[v.size () / 2];
+}
+
 int
 evaluateDetection (const agex::apps::DatasetSelection &selection, const std::string &model_path, float radius,
                    const std::string &json_path, const std::string &plots_dir)
 {
-  const agex::PatchClassifier classifier = agex::PatchClassifier::load (model_path);
-  const agex::apps::DetectorSettings settings = agex::apps::DetectorSettings::fromJson (classifier.metadata ());
+  const agex::apps::DetectorModel model = agex::apps::loadDetectorModel (model_path, agex::apps::DetectorKind::Agex);
+  const agex::PatchClassifier &classifier = *model.classifier;
+  const agex::apps::DetectorSettings &settings = model.settings;
   agex::apps::DetectionEvaluation evaluation (radius);
   agex::apps::Progress progress ("evaluated", selection.frame_ids.size ());
   std::vector<double> frame_ms;
@@ -109,7 +145,7 @@ evaluateDetection (const agex::apps::DatasetSelection &selection, const std::str
     const auto start = std::chrono::steady_clock::now ();
     const auto prepared = agex::apps::runDepthPipeline (cloud, settings.pipeline);
     const auto detections = agex::apps::detectBodyParts (prepared, classifier, settings.patch);
-    frame_ms.push_back (std::chrono::duration<double, std::milli> (std::chrono::steady_clock::now () - start).count ());
+    frame_ms.push_back (msSince (start));
     evaluation.addFrame (detections, selection.dataset.labelsOf (id));
     progress.step (i + 1);
   }
@@ -117,8 +153,7 @@ evaluateDetection (const agex::apps::DatasetSelection &selection, const std::str
   nlohmann::json doc = evaluation.report (kConfusionThreshold);
   doc["dataset"] = selection.dataset.directory ();
   doc["model"] = model_path;
-  std::sort (frame_ms.begin (), frame_ms.end ());
-  doc["ms_per_frame_median"] = frame_ms.empty () ? 0.0 : frame_ms[frame_ms.size () / 2];
+  doc["ms_per_frame_median"] = median (frame_ms);
   if (!json_path.empty ())
     agex::apps::writeJson (json_path, doc);
   std::cout << selection.dataset.directory () << ": " << selection.frame_ids.size () << " frames\n";
@@ -137,17 +172,167 @@ evaluateDetection (const agex::apps::DatasetSelection &selection, const std::str
     plot.x_label = "recall";
     plot.y_label = "precision";
     for (int c = 0; c < agex::kBodyPartCount; ++c)
-    {
-      const auto part = static_cast<agex::BodyPart> (c);
-      char name[64];
-      std::snprintf (name, sizeof name, "%s AP %.2f", agex::bodyPartName (part), evaluation.averagePrecision (part));
-      agex::apps::Plot::Series series{name, agex::apps::bodyPartColour (c), {}};
-      for (const auto &[recall, precision] : evaluation.precisionRecall (part))
-        series.points.emplace_back (recall, precision);
-      plot.series.push_back (series);
-    }
+      addPrecisionRecall (plot, evaluation, static_cast<agex::BodyPart> (c), agex::bodyPartName (static_cast<agex::BodyPart> (c)),
+                          agex::apps::bodyPartColour (c));
     agex::apps::writePng ((std::filesystem::path (plots_dir) / "precision_recall.png").string (),
                           agex::apps::renderPlot (plot));
+  }
+  return 0;
+}
+
+/** One detector's side of the comparison. */
+struct Contender
+{
+  Contender (float min_iou, float focal, float radius)
+    : by_overlap (agex::apps::DetectionEvaluation::boxOverlap (min_iou, focal)), by_distance (radius)
+  {
+  }
+  agex::apps::DetectionEvaluation by_overlap, by_distance;
+  std::vector<double> frame_ms;
+  double detections = 0.0, patches = 0.0;
+
+  void add (const std::vector<agex::apps::Detection> &detections_found, const std::vector<agex::PartLabel> &labels,
+            double ms, std::size_t patches_classified)
+  {
+    patches += static_cast<double> (patches_classified);
+    by_overlap.addFrame (detections_found, labels);
+    by_distance.addFrame (detections_found, labels);
+    frame_ms.push_back (ms);
+    detections += static_cast<double> (detections_found.size ());
+  }
+  nlohmann::json report () const
+  {
+    auto number = [] (double v) { return std::isfinite (v) ? nlohmann::json (v) : nlohmann::json (nullptr); };
+    nlohmann::json doc;
+    for (int c = 0; c < agex::kBodyPartCount; ++c)
+    {
+      const auto part = static_cast<agex::BodyPart> (c);
+      doc["ap"]["iou"][agex::bodyPartName (part)] = number (by_overlap.averagePrecision (part));
+      doc["ap"]["distance"][agex::bodyPartName (part)] = number (by_distance.averagePrecision (part));
+    }
+    doc["ms_per_frame"] = median (frame_ms);
+    doc["detections_per_frame"] = frame_ms.empty () ? 0.0 : detections / frame_ms.size ();
+    // What the time mostly buys, and unlike it independent of the machine's load.
+    doc["patches_classified_per_frame"] = frame_ms.empty () ? 0.0 : patches / frame_ms.size ();
+    return doc;
+  }
+};
+
+int
+compareDetectors (const agex::apps::DatasetSelection &selection, const std::string &agex_model_path,
+                  const std::string &sw_model_path, const agex::apps::SlidingWindowParams &window_override,
+                  float radius, float min_iou, const std::string &json_path, const std::string &plots_dir)
+{
+  using agex::apps::DetectorKind;
+  const agex::apps::DetectorModel agex_model = agex::apps::loadDetectorModel (agex_model_path, DetectorKind::Agex);
+  agex::apps::DetectorModel sw_model = agex::apps::loadDetectorModel (sw_model_path, DetectorKind::SlidingWindow);
+  if (window_override.stride > 0)
+    sw_model.settings.sliding_window.stride = window_override.stride;
+  if (!window_override.scales.empty ())
+    sw_model.settings.sliding_window.scales = window_override.scales;
+  const float focal = static_cast<float> (selection.dataset.info ().intrinsics.fx);
+  if (!(focal > 0.f))
+    throw std::runtime_error (selection.dataset.directory () + ": the dataset has no focal length (intrinsics.fx)");
+  constexpr int kContainmentK = 5;
+  Contender agex_side (min_iou, focal, radius), sw_side (min_iou, focal, radius);
+  agex::apps::CoverageEvaluation containment (kContainmentK, radius);
+
+  agex::apps::Progress progress ("compared", selection.frame_ids.size ());
+  for (std::size_t i = 0; i < selection.frame_ids.size (); ++i)
+  {
+    const auto &id = selection.frame_ids[i];
+    const auto cloud = selection.dataset.loadFrame (id);
+    const auto labels = selection.dataset.labelsOf (id);
+
+    auto start = std::chrono::steady_clock::now ();
+    const auto prepared = agex::apps::runDepthPipeline (cloud, agex_model.settings.pipeline);
+    const auto found = agex::apps::detectBodyParts (prepared, *agex_model.classifier, agex_model.settings.patch);
+    agex_side.add (found, labels, msSince (start), prepared.interest_points.size ());
+    containment.addFrame (prepared.interest_points, labels);
+
+    start = std::chrono::steady_clock::now ();
+    const auto prepared_sw = agex::apps::runDepthPipeline (cloud, sw_model.settings.pipeline);
+    std::size_t frame_windows = 0;
+    const auto windows_found =
+        agex::apps::detectBodyPartsSlidingWindow (prepared_sw, sw_model.classifier, sw_model.settings, &frame_windows);
+    double ms = msSince (start);
+    // The pipeline also ran AGEX, which the baseline does not need: not its time.
+    for (const auto &[stage, stage_ms] : prepared_sw.ms)
+      if (stage == "agex")
+        ms -= stage_ms;
+    sw_side.add (windows_found, labels, ms, frame_windows);
+    progress.step (i + 1);
+  }
+
+  const std::size_t frames = selection.frame_ids.size ();
+  nlohmann::json doc;
+  doc["dataset"] = selection.dataset.directory ();
+  doc["frames"] = frames;
+  doc["criteria"] = {{"iou", {{"min_iou", min_iou},
+                              {"focal_length_px", focal},
+                              {"box_side_m", {{"head", agex::apps::partBoxSide (agex::BodyPart::Head)},
+                                              {"hand", agex::apps::partBoxSide (agex::BodyPart::Hand)},
+                                              {"foot", agex::apps::partBoxSide (agex::BodyPart::Foot)}}}}},
+                     {"distance", {{"radius_m", radius}}}};
+  doc["agex"] = agex_side.report ();
+  doc["agex"]["model"] = agex_model_path;
+  doc["sliding_window"] = sw_side.report ();
+  doc["sliding_window"]["model"] = sw_model_path;
+  doc["sliding_window"]["stride_px"] = sw_model.settings.sliding_window.stride;
+  doc["sliding_window"]["scales"] = sw_model.settings.sliding_window.scales;
+  for (int c = 0; c < agex::kBodyPartCount; ++c)
+  {
+    const auto part = static_cast<agex::BodyPart> (c);
+    const std::size_t labels = containment.labelCount (part);
+    const double fraction = containment.coverage (part, kContainmentK);
+    doc["agex5_containment"][agex::bodyPartName (part)] = {
+        {"contained", static_cast<long> (std::lround (fraction * labels))}, {"labels", labels}, {"fraction", fraction}};
+  }
+  doc["agex5_containment"]["radius_m"] = radius;
+  if (!json_path.empty ())
+    agex::apps::writeJson (json_path, doc);
+
+  std::cout << selection.dataset.directory () << ": " << frames << " frames\n";
+  for (const auto *side : {&agex_side, &sw_side})
+  {
+    std::printf ("  %-14s %7.1f ms/frame %6.0f patches/frame  AP IoU>%.2f:",
+                 side == &agex_side ? "AGEX" : "sliding window", median (side->frame_ms),
+                 side->patches / std::max<std::size_t> (1, frames), min_iou);
+    for (const auto part : {agex::BodyPart::Head, agex::BodyPart::Hand, agex::BodyPart::Foot})
+      std::printf (" %s %.3f", agex::bodyPartName (part), side->by_overlap.averagePrecision (part));
+    std::printf ("  %.0f cm:", radius * 100.0);
+    for (const auto part : {agex::BodyPart::Head, agex::BodyPart::Hand, agex::BodyPart::Foot})
+      std::printf (" %s %.3f", agex::bodyPartName (part), side->by_distance.averagePrecision (part));
+    std::printf ("\n");
+  }
+  for (const char *part : {"head", "hand", "foot"})
+    std::printf ("  AGEX_5 contains %ld/%zu %s labels\n", doc["agex5_containment"][part]["contained"].get<long> (),
+                 doc["agex5_containment"][part]["labels"].get<std::size_t> (), part);
+
+  if (!plots_dir.empty ())
+  {
+    std::filesystem::create_directories (plots_dir);
+    for (const auto part : {agex::BodyPart::Head, agex::BodyPart::Hand, agex::BodyPart::Foot})
+    {
+      agex::apps::Plot plot;
+      plot.title = std::string (agex::bodyPartName (part)) + ": AGEX against sliding windows (" +
+                   std::to_string (frames) + " frames)";
+      plot.x_label = "recall";
+      plot.y_label = "precision";
+      char overlap[32], distance[32];
+      std::snprintf (overlap, sizeof overlap, "IoU > %.2g", min_iou);
+      std::snprintf (distance, sizeof distance, "%.0f cm", radius * 100.0);
+      addPrecisionRecall (plot, agex_side.by_overlap, part, std::string ("AGEX, ") + overlap, cv::Scalar (0, 0, 200));
+      addPrecisionRecall (plot, sw_side.by_overlap, part, std::string ("sliding window, ") + overlap,
+                          cv::Scalar (200, 80, 0));
+      addPrecisionRecall (plot, agex_side.by_distance, part, std::string ("AGEX, ") + distance,
+                          cv::Scalar (120, 120, 255));
+      addPrecisionRecall (plot, sw_side.by_distance, part, std::string ("sliding window, ") + distance,
+                          cv::Scalar (240, 190, 120));
+      agex::apps::writePng ((std::filesystem::path (plots_dir) / ("compare_" + std::string (agex::bodyPartName (part)) +
+                                                                   ".png")).string (),
+                            agex::apps::renderPlot (plot));
+    }
   }
   return 0;
 }
@@ -158,14 +343,21 @@ main (int argc, char **argv)
 {
   agex::apps::PipelineParams params;
   std::vector<std::string> vector_flags;
-  std::string mode, dataset_dir, json_path, plot_path, plots_dir, model_path = AGEX_BUNDLED_MODEL;
+  std::string mode, dataset_dir, json_path, plot_path, plots_dir, model_path = AGEX_BUNDLED_MODEL,
+                                                                    agex_model_path = AGEX_BUNDLED_MODEL,
+                                                                    sw_model_path = AGEX_BUNDLED_SW_MODEL;
+  float min_iou = 0.5f;
+  agex::apps::SlidingWindowParams window_override;
+  window_override.stride = 0;
+  window_override.scales.clear ();
   int k = 5;
   float radius = 0.10f;
   bool keyframes = false, details = false;
 
-  po::options_description general ("agex_eval coverage|detect --dataset DIR[@SEQ,...] [options]\n"
-                                    "Evaluates AGEX coverage or body-part detection on a labelled agex dataset");
-  general.add_options () ("help,h", "show this help") ("mode", po::value (&mode), "coverage")
+  po::options_description general ("agex_eval coverage|detect|compare --dataset DIR[@SEQ,...] [options]\n"
+                                    "Evaluates AGEX coverage or body-part detection on a labelled agex dataset, or\n"
+                                    "compares the AGEX detector with the sliding-window baseline");
+  general.add_options () ("help,h", "show this help") ("mode", po::value (&mode), "coverage, detect or compare")
     ("dataset", po::value (&dataset_dir), "dataset directory")
     ("k", po::value (&k)->default_value (k), "number of extrema per mesh scored")
     ("radius", po::value (&radius)->default_value (radius, "0.1"), "metres between a tip and a point that covers it")
@@ -174,7 +366,17 @@ main (int argc, char **argv)
     ("json", po::value (&json_path), "write the report as JSON here")
     ("plot", po::value (&plot_path), "coverage: write the coverage-vs-k curve (k up to 20) as PNG here")
     ("model", po::value (&model_path)->default_value (model_path), "detect: model file (default: the bundled model)")
-    ("plots", po::value (&plots_dir), "detect: write precision_recall.png into this directory");
+    ("plots", po::value (&plots_dir),
+     "detect: write precision_recall.png into this directory; compare: compare_{head,hand,foot}.png")
+    ("model-agex", po::value (&agex_model_path)->default_value (agex_model_path), "compare: the AGEX model (default: the bundled model)")
+    ("model-sw", po::value (&sw_model_path)->default_value (sw_model_path),
+     "compare: the sliding-window model (default: the bundled one)")
+    ("min-iou", po::value (&min_iou)->default_value (min_iou, "0.5"),
+     "compare: box overlap (intersection over union) above which a detection matches a part")
+    ("window-stride", po::value (&window_override.stride),
+     "compare: pixels between window centres (default: the sliding-window model's)")
+    ("window-scales", po::value (&window_override.scales)->multitoken (),
+     "compare: window extents over the trained extent (default: the sliding-window model's)");
   // The pipeline's own --k (points per mesh, centroid included) would make --k
   // ambiguous; evaluateCoverage sets the pipeline's k from the extrema scored.
   po::options_description pipeline ("Pipeline (defaults isolate a person 1.3-2.6 m in front of the sensor,\n"
@@ -197,6 +399,21 @@ main (int argc, char **argv)
       throw std::runtime_error ("--dataset is required (see --help)");
     if (k < 1 || !(radius > 0.f))
       throw std::runtime_error ("--k must be at least 1 and --radius positive");
+    if (mode == "compare")
+    {
+      if (!(min_iou > 0.f && min_iou < 1.f))
+        throw std::runtime_error ("--min-iou must lie in (0, 1)");
+      if (window_override.stride < 0 || std::any_of (window_override.scales.begin (), window_override.scales.end (),
+                                                     [] (float s) { return !(s > 0.f) || !std::isfinite (s); }))
+        throw std::runtime_error ("--window-stride must be positive and --window-scales finite and positive");
+      const auto selection = agex::apps::selectDataset (dataset_dir, keyframes);
+      if (!json_path.empty ())
+        agex::checkOutputIsNotInput (json_path, {agex_model_path, sw_model_path,
+                                                 selection.dataset.directory () + "/dataset.json",
+                                                 selection.dataset.directory () + "/labels.csv"});
+      return compareDetectors (selection, agex_model_path, sw_model_path, window_override, radius, min_iou, json_path,
+                               plots_dir);
+    }
     if (mode == "detect")
       return evaluateDetection (agex::apps::selectDataset (dataset_dir, keyframes), model_path, radius, json_path,
                                 plots_dir);
@@ -209,7 +426,7 @@ main (int argc, char **argv)
           agex::checkOutputIsNotInput (out, {dir + "/dataset.json", dir + "/labels.csv"});
       return evaluateCoverage (selection, params, k, radius, keyframes, details, json_path, plot_path);
     }
-    throw std::runtime_error ("unknown mode '" + mode + "' (expected coverage or detect)");
+    throw std::runtime_error ("unknown mode '" + mode + "' (expected coverage, detect or compare)");
   }
   catch (const std::exception &e)
   {

@@ -1,16 +1,19 @@
 // agex_train: trains the body-part patch classifier from labelled agex datasets
-// and writes one model file holding everything detection needs.
-//   agex_train --dataset DIR[@SEQ,...] [--dataset ...] --out MODEL [options]
+// and writes one model file holding everything detection needs: for AGEX points (the
+// default) or for the sliding-window baseline (--sliding-window).
+//   agex_train --dataset DIR[@SEQ,...] [--dataset ...] --out MODEL [--sliding-window] [options]
 
 #include <agex/apps/body_parts.h>
 #include <agex/apps/command_line.h>
 #include <agex/apps/dataset_selection.h>
 #include <agex/apps/depth_pipeline.h>
+#include <agex/apps/sliding_window.h>
 #include <agex/classification/patch_classifier.h>
 #include <agex/common/atomic_file.h>
 
 #include <boost/program_options.hpp>
 
+#include <algorithm>
 #include <chrono>
 #include <iostream>
 #include <sstream>
@@ -28,8 +31,11 @@ main (int argc, char **argv)
   std::string out;
   int random_negatives = 8;
   float radius = 0.10f;
-  bool keyframes = false;
+  bool keyframes = false, sliding_window = false;
   std::uint64_t seed = 1;
+  agex::apps::SlidingWindowParams windows;
+  int window_negatives = 40, jitter = 3;
+  float jitter_radius = 0.04f;
 
   po::options_description general ("agex_train --dataset DIR[@SEQ,...] [--dataset ...] --out MODEL [options]\n"
                                     "Trains the body-part classifier on labelled agex datasets");
@@ -49,8 +55,21 @@ main (int argc, char **argv)
     ("patch-size", po::value (&patch.size)->default_value (patch.size), "patch cells per side (<= 41)")
     ("patch-extent", po::value (&patch.extent)->default_value (patch.extent, "0.6"), "patch width, metres")
     ("patch-clamp", po::value (&patch.clamp)->default_value (patch.clamp, "0.3"), "relative depth clamp, metres");
+  po::options_description baseline ("Sliding-window baseline (agex::SlidingWindowDetector)");
+  baseline.add_options () ("sliding-window", po::bool_switch (&sliding_window),
+                           "train the sliding-window baseline: upright patches centred on the labelled tips "
+                           "against random patches of the rest of the person")
+    ("window-negatives", po::value (&window_negatives)->default_value (window_negatives),
+     "random person pixels per frame (farther than 1.5 radius from every tip) as negatives")
+    ("jitter", po::value (&jitter)->default_value (jitter), "extra positives per tip, at random pixels near it")
+    ("jitter-radius", po::value (&jitter_radius)->default_value (jitter_radius, "0.04"),
+     "metres from the tip for the extra positives")
+    ("window-stride", po::value (&windows.stride)->default_value (windows.stride),
+     "detection: pixels between window centres (stored in the model)")
+    ("window-scales", po::value (&windows.scales)->multitoken ()->default_value (windows.scales, "1"),
+     "detection: window extents over --patch-extent (stored in the model)");
   po::options_description all;
-  all.add (general).add (agex::apps::pipelineOptionsDescription (params, vector_flags));
+  all.add (general).add (baseline).add (agex::apps::pipelineOptionsDescription (params, vector_flags));
 
   try
   {
@@ -59,6 +78,11 @@ main (int argc, char **argv)
     agex::apps::finishPipelineOptions (vector_flags, params);
     if (datasets.empty () || out.empty ())
       throw std::runtime_error ("--dataset and --out are required (see --help)");
+    if (windows.stride < 1 || windows.scales.empty () ||
+        std::any_of (windows.scales.begin (), windows.scales.end (), [] (float s) { return !(s > 0.f); }) ||
+        window_negatives < 0 || jitter < 0)
+      throw std::runtime_error ("--window-stride must be at least 1, --window-scales positive, "
+                                "--window-negatives and --jitter not negative");
     classifier_params.dictionary.seed = seed;
     const auto start = std::chrono::steady_clock::now ();
 
@@ -78,7 +102,12 @@ main (int argc, char **argv)
         if (labels.empty ())
           continue;  // unlabelled frames say nothing about where parts are
         const auto prepared = agex::apps::runDepthPipeline (selection.dataset.loadFrame (id), params);
-        agex::apps::collectTrainingSamples (prepared, labels, radius, random_negatives, patch, rng, patches, classes);
+        if (sliding_window)
+          agex::apps::collectWindowTrainingSamples (prepared, labels, radius, jitter, jitter_radius, window_negatives,
+                                                    patch, rng, patches, classes);
+        else
+          agex::apps::collectTrainingSamples (prepared, labels, radius, random_negatives, patch, rng, patches,
+                                              classes);
         ++frames;
         progress.step (i + 1);
       }
@@ -104,6 +133,11 @@ main (int argc, char **argv)
     agex::apps::DetectorSettings settings;
     settings.pipeline = params;
     settings.patch = patch;
+    if (sliding_window)
+    {
+      settings.detector = agex::apps::DetectorKind::SlidingWindow;
+      settings.sliding_window = windows;
+    }
     std::ostringstream command;
     for (int i = 0; i < argc; ++i)
       command << (i ? " " : "") << argv[i];

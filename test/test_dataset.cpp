@@ -1108,3 +1108,49 @@ TEST_F (BodyPartApps, DamagedModelIsAClearError)
              1);
   EXPECT_NE (readText (out).find ("missing.yml"), std::string::npos) << readText (out);
 }
+
+TEST_F (BodyPartApps, CompareRunsBothDetectorsAndRefusesSwappedModels)
+{
+  const std::string sw_model = tmp_.file ("sw.yml"), json = tmp_.file ("compare.json"), out = tmp_.file ("out.txt");
+  ASSERT_EQ (run (quoted (AGEX_TRAIN_EXECUTABLE) + " --sliding-window --dataset " + quoted (dataset ()) +
+                  " --weak-count 40 --fragments 20 --window-negatives 10 --out " + quoted (sw_model) + " >> " +
+                  quoted (log ()) + " 2>&1"),
+             0)
+      << readText (log ());
+  ASSERT_EQ (run (quoted (AGEX_EVAL_EXECUTABLE) + " compare --dataset " + quoted (dataset ()) + " --keyframes" +
+                  " --model-agex " + quoted (model ()) + " --model-sw " + quoted (sw_model) + " --json " +
+                  quoted (json) + " --plots " + quoted (tmp_.file ("plots")) + " >> " + quoted (log ()) + " 2>&1"),
+             0)
+      << readText (log ());
+  const auto doc = nlohmann::json::parse (readText (json));
+  EXPECT_EQ (doc.at ("frames").get<int> (), 11);
+  for (const char *side : {"agex", "sliding_window"})
+    for (const char *criterion : {"iou", "distance"})
+      for (const char *part : {"head", "hand", "foot"})
+      {
+        const double ap = doc.at (side).at ("ap").at (criterion).at (part).get<double> ();
+        EXPECT_GE (ap, 0.0) << side << " " << criterion << " " << part;
+        EXPECT_LE (ap, 1.0) << side << " " << criterion << " " << part;
+      }
+  // Both find the head of the frames they were trained on.
+  EXPECT_GT (doc["agex"]["ap"]["distance"]["head"].get<double> (), 0.5);
+  EXPECT_GT (doc["sliding_window"]["ap"]["distance"]["head"].get<double> (), 0.5);
+  // The baseline classifies many more patches than there are AGEX points.
+  EXPECT_GT (doc["sliding_window"]["patches_classified_per_frame"].get<double> (),
+             5.0 * doc["agex"]["patches_classified_per_frame"].get<double> ());
+  EXPECT_GT (doc["sliding_window"]["ms_per_frame"].get<double> (), 0.0);
+  EXPECT_EQ (doc["agex5_containment"]["head"]["labels"].get<int> (), 11);
+  EXPECT_LE (doc["agex5_containment"]["head"]["contained"].get<int> (), 11);
+  for (const char *part : {"head", "hand", "foot"})
+    EXPECT_TRUE (fs::exists (tmp_.file ("plots") + "/compare_" + part + ".png")) << part;
+
+  // A model of the other kind is refused, naming the file.
+  EXPECT_EQ (run (quoted (AGEX_EVAL_EXECUTABLE) + " compare --dataset " + quoted (dataset ()) + " --model-agex " +
+                  quoted (model ()) + " --model-sw " + quoted (model ()) + " > " + quoted (out) + " 2>&1"),
+             1);
+  EXPECT_NE (readText (out).find (model () + " is an AGEX model"), std::string::npos) << readText (out);
+  EXPECT_EQ (run (quoted (AGEX_DETECT_EXECUTABLE) + " " + quoted (AGEX_SOURCE_DIR "/data/frames/bonn_1_002.png") +
+                  " --model " + quoted (sw_model) + " > " + quoted (out) + " 2>&1"),
+             1);
+  EXPECT_NE (readText (out).find (sw_model + " is a sliding-window model"), std::string::npos) << readText (out);
+}

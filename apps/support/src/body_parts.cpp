@@ -1,5 +1,6 @@
 #include <agex/apps/body_parts.h>
 
+#include <agex/classification/non_maximum_suppression.h>
 #include <agex/classification/patch_classifier.h>
 #include <agex/features/depth_patch_estimation.h>
 
@@ -50,39 +51,126 @@ nearestTip (const Eigen::Vector3f &p, const std::vector<PartLabel> &labels, floa
   }
   return best;
 }
+
+/** The pixels of all kept meshes. */
+std::vector<int>
+surfaceIndices (const PipelineResult &prepared)
+{
+  std::vector<int> surface;
+  for (const auto &mesh : prepared.meshes)
+    surface.insert (surface.end (), mesh.indices.begin (), mesh.indices.end ());
+  return surface;
+}
+
+/** An interest point at a pixel without orientation: its patch is upright. */
+agex::InterestPoint
+uprightPoint (const pcl::PointCloud<pcl::PointXYZ> &cloud, int index)
+{
+  agex::InterestPoint ip;
+  ip.getVector3fMap () = cloud[index].getVector3fMap ();
+  ip.orientation[0] = ip.orientation[1] = ip.orientation[2] = 0.f;
+  ip.u = index % static_cast<int> (cloud.width);
+  ip.v = index / static_cast<int> (cloud.width);
+  ip.rank = 0;
+  return ip;
+}
+
+/** count random mesh points farther than min_distance from every tip, as background
+  * (label -1); with random_orientation each gets a random in-plane orientation. */
+void
+appendRandomNegatives (const PipelineResult &prepared, const std::vector<PartLabel> &labels, float min_distance,
+                       int count, bool random_orientation, std::mt19937_64 &rng,
+                       pcl::PointCloud<agex::InterestPoint> &points, std::vector<int> &point_classes)
+{
+  const std::vector<int> surface = surfaceIndices (prepared);
+  const auto &cloud = *prepared.filtered;
+  for (int n = 0; n < count && !surface.empty (); ++n)
+  {
+    const int index = surface[rng () % surface.size ()];
+    agex::InterestPoint ip = uprightPoint (cloud, index);
+    if (nearestTip (ip.getVector3fMap (), labels, min_distance) >= 0)
+      continue;
+    if (random_orientation)
+    {
+      const double angle = (rng () % 3600) * M_PI / 1800.0;
+      ip.orientation[0] = static_cast<float> (std::sin (angle));
+      ip.orientation[1] = static_cast<float> (std::cos (angle));
+    }
+    points.push_back (ip);
+    point_classes.push_back (-1);
+  }
+}
+
+/** The patches of points, appended with their classes. */
+void
+appendPatches (const PipelineResult &prepared, const pcl::PointCloud<agex::InterestPoint> &points,
+               const std::vector<int> &point_classes, const PatchParams &patch, std::vector<agex::DepthPatch> &patches,
+               std::vector<int> &classes)
+{
+  std::vector<agex::DepthPatch> frame_patches;
+  computePatches (prepared, points, patch, frame_patches);
+  for (std::size_t i = 0; i < frame_patches.size () && i < point_classes.size (); ++i)
+  {
+    patches.push_back (frame_patches[i]);
+    classes.push_back (point_classes[i]);
+  }
+}
 }  // namespace
+
+const char *
+detectorKindName (DetectorKind kind)
+{
+  return kind == DetectorKind::SlidingWindow ? "sliding_window" : "agex";
+}
+
+void
+DetectorSettings::requireDetector (DetectorKind expected, const std::string &model_path) const
+{
+  auto described = [] (DetectorKind kind) {
+    return std::string (kind == DetectorKind::Agex ? "an AGEX model" : "a sliding-window model");
+  };
+  if (detector != expected)
+    throw std::runtime_error (model_path + " is " + described (detector) + ", but " + described (expected) +
+                              " is needed here" +
+                              (expected == DetectorKind::Agex ? " (train one with agex_train without --sliding-window)"
+                                                              : " (train one with agex_train --sliding-window)"));
+}
 
 nlohmann::json
 DetectorSettings::toJson () const
 {
   const PipelineParams &p = pipeline;
   auto vec = [] (const Eigen::Vector3f &v) { return nlohmann::json::array ({v.x (), v.y (), v.z ()}); };
-  return {{"patch",
-           {{"size", patch.size},
-            {"extent", patch.extent},
-            {"clamp", patch.clamp},
-            {"suppression_radius", patch.suppression_radius}}},
-          {"pipeline",
-           {{"median_window", p.median_window},
-            {"median_max_movement", p.median_max_movement},
-            {"remove_mixed_pixels", p.remove_mixed_pixels},
-            {"mixed_window_radius", p.mixed_window_radius},
-            {"mixed_min_jump", p.mixed_min_jump},
-            {"mixed_max_veil_angle_deg", p.mixed_max_veil_angle_deg},
-            {"crop_min", vec (p.crop_min)},
-            {"crop_max", vec (p.crop_max)},
-            {"remove_floor", p.remove_floor},
-            {"up", vec (p.up)},
-            {"floor_max_tilt_deg", p.floor_max_tilt_deg},
-            {"floor_distance", p.floor_distance},
-            {"floor_min_inliers", p.floor_min_inliers},
-            {"spur_min_connected", p.spur_min_connected},
-            {"spur_iterations", p.spur_iterations},
-            {"spur_depth", p.spur_depth},
-            {"delta_connected", p.delta_connected},
-            {"min_mesh_size", p.min_mesh_size},
-            {"k", p.k},
-            {"delta_orient", p.delta_orient}}}};
+  nlohmann::json doc = {{"detector", detectorKindName (detector)},
+                        {"patch",
+                         {{"size", patch.size},
+                          {"extent", patch.extent},
+                          {"clamp", patch.clamp},
+                          {"suppression_radius", patch.suppression_radius}}},
+                        {"pipeline",
+                         {{"median_window", p.median_window},
+                          {"median_max_movement", p.median_max_movement},
+                          {"remove_mixed_pixels", p.remove_mixed_pixels},
+                          {"mixed_window_radius", p.mixed_window_radius},
+                          {"mixed_min_jump", p.mixed_min_jump},
+                          {"mixed_max_veil_angle_deg", p.mixed_max_veil_angle_deg},
+                          {"crop_min", vec (p.crop_min)},
+                          {"crop_max", vec (p.crop_max)},
+                          {"remove_floor", p.remove_floor},
+                          {"up", vec (p.up)},
+                          {"floor_max_tilt_deg", p.floor_max_tilt_deg},
+                          {"floor_distance", p.floor_distance},
+                          {"floor_min_inliers", p.floor_min_inliers},
+                          {"spur_min_connected", p.spur_min_connected},
+                          {"spur_iterations", p.spur_iterations},
+                          {"spur_depth", p.spur_depth},
+                          {"delta_connected", p.delta_connected},
+                          {"min_mesh_size", p.min_mesh_size},
+                          {"k", p.k},
+                          {"delta_orient", p.delta_orient}}}};
+  if (detector == DetectorKind::SlidingWindow)
+    doc["sliding_window"] = {{"stride", sliding_window.stride}, {"scales", sliding_window.scales}};
+  return doc;
 }
 
 DetectorSettings
@@ -96,6 +184,16 @@ DetectorSettings::fromJson (const nlohmann::json &doc)
     s.patch.extent = patch.at ("extent").get<float> ();
     s.patch.clamp = patch.at ("clamp").get<float> ();
     s.patch.suppression_radius = patch.value ("suppression_radius", s.patch.suppression_radius);
+    const std::string kind = doc.value ("detector", std::string (detectorKindName (DetectorKind::Agex)));
+    if (kind == detectorKindName (DetectorKind::SlidingWindow))
+      s.detector = DetectorKind::SlidingWindow;
+    else if (kind != detectorKindName (DetectorKind::Agex))
+      throw std::runtime_error ("unknown detector '" + kind + "' (expected agex or sliding_window)");
+    if (doc.contains ("sliding_window"))
+    {
+      s.sliding_window.stride = doc["sliding_window"].at ("stride").get<int> ();
+      s.sliding_window.scales = doc["sliding_window"].at ("scales").get<std::vector<float>> ();
+    }
     const auto &p = doc.at ("pipeline");
     auto vec = [] (const nlohmann::json &a) {
       return Eigen::Vector3f (a.at (0).get<float> (), a.at (1).get<float> (), a.at (2).get<float> ());
@@ -172,24 +270,21 @@ detectBodyParts (const PipelineResult &prepared, const agex::PatchClassifier &cl
     d.point = prepared.interest_points[i];
     detections.push_back (d);
   }
-  std::stable_sort (detections.begin (), detections.end (),
-                    [] (const Detection &a, const Detection &b) { return a.confidence > b.confidence; });
   // Several extrema often sit on one part (a hand's fingers, the two sides of a head):
   // keep the most confident detection of a class within the suppression radius.
-  if (params.suppression_radius > 0.f)
+  std::vector<Eigen::Vector3f> positions;
+  std::vector<int> parts;
+  std::vector<float> scores;
+  for (const auto &d : detections)
   {
-    std::vector<Detection> kept;
-    for (const auto &d : detections)
-    {
-      const bool suppressed = std::any_of (kept.begin (), kept.end (), [&] (const Detection &k) {
-        return k.part == d.part &&
-               (k.point.getVector3fMap () - d.point.getVector3fMap ()).norm () < params.suppression_radius;
-      });
-      if (!suppressed)
-        kept.push_back (d);
-    }
-    detections.swap (kept);
+    positions.push_back (d.point.getVector3fMap ());
+    parts.push_back (static_cast<int> (d.part));
+    scores.push_back (d.confidence);
   }
+  std::vector<Detection> kept;
+  for (const std::size_t i : agex::suppressNonMaxima (positions, parts, scores, params.suppression_radius))
+    kept.push_back (detections[i]);
+  detections.swap (kept);
   if (classify_ms)
     *classify_ms = msSince (start);
   return detections;
@@ -222,35 +317,129 @@ collectTrainingSamples (const PipelineResult &prepared, const std::vector<PartLa
     point_classes.push_back (tip < 0 ? -1 : static_cast<int> (labels[tip].part));
   }
   // Random surface points: the classifier must also reject what is not an extremum.
-  std::vector<int> surface;
-  for (const auto &mesh : prepared.meshes)
-    surface.insert (surface.end (), mesh.indices.begin (), mesh.indices.end ());
+  appendRandomNegatives (prepared, labels, 1.5f * radius, random_negatives, true, rng, points, point_classes);
+  appendPatches (prepared, points, point_classes, patch, patches, classes);
+}
+
+void
+collectWindowTrainingSamples (const PipelineResult &prepared, const std::vector<PartLabel> &labels, float radius,
+                              int jitter, float jitter_radius, int random_negatives, const PatchParams &patch,
+                              std::mt19937_64 &rng, std::vector<agex::DepthPatch> &patches, std::vector<int> &classes)
+{
+  if (!prepared.filtered)
+    return;
   const auto &cloud = *prepared.filtered;
-  for (int n = 0; n < random_negatives && !surface.empty (); ++n)
+  const std::vector<int> surface = surfaceIndices (prepared);
+  pcl::PointCloud<agex::InterestPoint> points;
+  std::vector<int> point_classes;
+  for (const auto &l : labels)
   {
-    const int index = surface[rng () % surface.size ()];
-    const Eigen::Vector3f pos = cloud[index].getVector3fMap ();
-    if (nearestTip (pos, labels, 1.5f * radius) >= 0)
+    if (!l.visible || !l.tip.allFinite ())
       continue;
-    const double angle = (rng () % 3600) * M_PI / 1800.0;
-    agex::InterestPoint ip;
-    ip.getVector3fMap () = pos;
-    ip.orientation[0] = static_cast<float> (std::sin (angle));
-    ip.orientation[1] = static_cast<float> (std::cos (angle));
-    ip.orientation[2] = 0.f;
-    ip.u = index % static_cast<int> (cloud.width);
-    ip.v = index / static_cast<int> (cloud.width);
-    ip.rank = 0;
-    points.push_back (ip);
-    point_classes.push_back (-1);
+    int nearest = -1;
+    float nearest_d = radius;
+    std::vector<int> near;
+    for (const int index : surface)
+    {
+      const float d = (cloud[index].getVector3fMap () - l.tip).norm ();
+      if (d <= nearest_d)
+      {
+        nearest_d = d;
+        nearest = index;
+      }
+      if (d <= jitter_radius)
+        near.push_back (index);
+    }
+    if (nearest < 0)
+      continue;  // the tip's part did not survive the pipeline
+    points.push_back (uprightPoint (cloud, nearest));
+    point_classes.push_back (static_cast<int> (l.part));
+    for (int n = 0; n < jitter && !near.empty (); ++n)
+    {
+      points.push_back (uprightPoint (cloud, near[rng () % near.size ()]));
+      point_classes.push_back (static_cast<int> (l.part));
+    }
   }
-  std::vector<agex::DepthPatch> frame_patches;
-  computePatches (prepared, points, patch, frame_patches);
-  for (std::size_t i = 0; i < frame_patches.size () && i < point_classes.size (); ++i)
+  appendRandomNegatives (prepared, labels, 1.5f * radius, random_negatives, false, rng, points, point_classes);
+  appendPatches (prepared, points, point_classes, patch, patches, classes);
+}
+
+float
+partBoxSide (BodyPart part)
+{
+  switch (part)
   {
-    patches.push_back (frame_patches[i]);
-    classes.push_back (point_classes[i]);
+  case BodyPart::Head:
+    return 0.25f;
+  case BodyPart::Hand:
+    return 0.15f;
+  default:
+    return 0.20f;
   }
+}
+
+PixelBox
+partBox (BodyPart part, float u, float v, float z, float scale, float focal)
+{
+  const float half = 0.5f * partBoxSide (part) * scale * focal / z;
+  if (!(half > 0.f) || !std::isfinite (half))
+    return {};
+  return {u + 0.5f - half, v + 0.5f - half, u + 0.5f + half, v + 0.5f + half};
+}
+
+float
+intersectionOverUnion (const PixelBox &a, const PixelBox &b)
+{
+  const float area_a = std::max (0.f, a.u1 - a.u0) * std::max (0.f, a.v1 - a.v0);
+  const float area_b = std::max (0.f, b.u1 - b.u0) * std::max (0.f, b.v1 - b.v0);
+  const float overlap = std::max (0.f, std::min (a.u1, b.u1) - std::max (a.u0, b.u0)) *
+                        std::max (0.f, std::min (a.v1, b.v1) - std::max (a.v0, b.v0));
+  const float united = area_a + area_b - overlap;
+  return area_a > 0.f && area_b > 0.f && united > 0.f ? overlap / united : 0.f;
+}
+
+DetectionEvaluation
+DetectionEvaluation::boxOverlap (float min_iou, float focal)
+{
+  DetectionEvaluation e (0.f);
+  e.min_iou_ = min_iou;
+  e.focal_ = focal;
+  return e;
+}
+
+float
+DetectionEvaluation::matchQuality (const Detection &d, const PartLabel &l) const
+{
+  if (!l.visible || !l.tip.allFinite ())
+    return -1.f;
+  if (min_iou_ > 0.f)
+  {
+    // Both boxes are the same physical size for the detected class: the detection's at its
+    // window scale and depth, the label's at scale 1 around the tip.
+    const float iou = intersectionOverUnion (
+        partBox (d.part, static_cast<float> (d.point.u), static_cast<float> (d.point.v), d.point.z, d.scale, focal_),
+        partBox (d.part, l.tip_px.x (), l.tip_px.y (), l.tip.z (), 1.f, focal_));
+    return iou > min_iou_ ? iou : -1.f;
+  }
+  const float dist = (l.tip - d.point.getVector3fMap ()).norm ();
+  return dist <= radius_ ? radius_ - dist : -1.f;
+}
+
+int
+DetectionEvaluation::bestLabel (const Detection &d, const std::vector<PartLabel> &labels) const
+{
+  int best = -1;
+  float best_quality = -1.f;
+  for (std::size_t i = 0; i < labels.size (); ++i)
+  {
+    const float q = matchQuality (d, labels[i]);
+    if (q >= 0.f && q > best_quality)
+    {
+      best_quality = q;
+      best = static_cast<int> (i);
+    }
+  }
+  return best;
 }
 
 void
@@ -269,18 +458,16 @@ DetectionEvaluation::addFrame (const std::vector<Detection> &detections, const s
                     [] (const Detection *a, const Detection *b) { return a->confidence > b->confidence; });
   for (const Detection *d : order)
   {
-    const Eigen::Vector3f p = d->point.getVector3fMap ();
     int match = -1;
-    float best = radius_;
+    float best = -1.f;
     for (std::size_t i = 0; i < labels.size (); ++i)
     {
-      const auto &l = labels[i];
-      if (taken[i] || l.part != d->part || !l.visible || !l.tip.allFinite ())
+      if (taken[i] || labels[i].part != d->part)
         continue;
-      const float dist = (l.tip - p).norm ();
-      if (dist <= best)
+      const float quality = matchQuality (*d, labels[i]);
+      if (quality >= 0.f && quality >= best)
       {
-        best = dist;
+        best = quality;
         match = static_cast<int> (i);
       }
     }
@@ -296,7 +483,7 @@ DetectionEvaluation::addFrame (const std::vector<Detection> &detections, const s
             std::acos (std::clamp (static_cast<double> (axis.normalized ().dot (o.normalized ())), -1.0, 1.0)) * 180.0 /
             M_PI);
     }
-    const int tip = nearestTip (p, labels, radius_);
+    const int tip = bestLabel (*d, labels);
     pairs_.push_back ({tip < 0 ? 3 : static_cast<int> (labels[tip].part), cls, d->confidence});
   }
   // Tips no detection of any class reached, with the confidence it would have needed.
@@ -307,7 +494,7 @@ DetectionEvaluation::addFrame (const std::vector<Detection> &detections, const s
       continue;
     float best = -1.f;
     for (const auto &d : detections)
-      if ((d.point.getVector3fMap () - l.tip).norm () <= radius_)
+      if (matchQuality (d, l) >= 0.f)
         best = std::max (best, d.confidence);
     pairs_.push_back ({static_cast<int> (l.part), -1, best});
   }
@@ -374,7 +561,10 @@ DetectionEvaluation::report (float threshold) const
   auto number = [] (double v) { return std::isfinite (v) ? nlohmann::json (v) : nlohmann::json (nullptr); };
   nlohmann::json doc;
   doc["frames"] = frames_;
-  doc["radius_m"] = radius_;
+  if (min_iou_ > 0.f)
+    doc["min_iou"] = min_iou_;
+  else
+    doc["radius_m"] = radius_;
   const char *names[] = {"head", "hand", "foot", "background"};
   for (int c = 0; c < kBodyPartCount; ++c)
   {

@@ -151,6 +151,13 @@ renderPlot (const Plot &plot, int width, int height)
   cv::putText (image, plot.x_label, cv::Point (width / 2 - 40, height - 15), font, 0.5, cv::Scalar (0, 0, 0), 1,
                cv::LINE_AA);
   cv::putText (image, plot.y_label, cv::Point (5, top - 8), font, 0.5, cv::Scalar (0, 0, 0), 1, cv::LINE_AA);
+  // The legend moves left as far as its longest name needs.
+  int legend_width = 170;
+  for (const auto &s : plot.series)
+  {
+    int baseline = 0;
+    legend_width = std::max (legend_width, 42 + cv::getTextSize (s.name, font, 0.5, 1, &baseline).width);
+  }
   for (std::size_t i = 0; i < plot.series.size (); ++i)
   {
     const auto &s = plot.series[i];
@@ -158,7 +165,7 @@ renderPlot (const Plot &plot, int width, int height)
       if (std::isfinite (s.points[j - 1].y) && std::isfinite (s.points[j].y))
         cv::line (image, to_pixel (s.points[j - 1].x, s.points[j - 1].y), to_pixel (s.points[j].x, s.points[j].y),
                   s.colour, 2, cv::LINE_AA);
-    const cv::Point legend (width - right - 170, height - bottom - 20 - 22 * static_cast<int> (plot.series.size () - 1 - i));
+    const cv::Point legend (width - right - legend_width, height - bottom - 20 - 22 * static_cast<int> (plot.series.size () - 1 - i));
     cv::line (image, legend, legend + cv::Point (25, 0), s.colour, 3, cv::LINE_AA);
     cv::putText (image, s.name, legend + cv::Point (32, 5), font, 0.5, cv::Scalar (0, 0, 0), 1, cv::LINE_AA);
   }

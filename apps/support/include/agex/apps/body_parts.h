@@ -37,6 +37,23 @@ struct Detection
   float confidence = 0.f;  ///< in [0, 1]
   float margin = 0.f;      ///< boosted margin of that class
   agex::InterestPoint point;
+  /** Sliding windows: the window's extent over the trained one (AGEX points: 1). */
+  float scale = 1.f;
+};
+
+/** The detector a model was trained for (its patches are cut differently). */
+enum class DetectorKind
+{
+  Agex,          ///< AGEX points, patches oriented along the point's orientation
+  SlidingWindow  ///< every window position, upright patches (agex::SlidingWindowDetector)
+};
+const char *detectorKindName (DetectorKind kind);
+
+/** Window layout of a sliding-window model (agex::SlidingWindowDetector). */
+struct SlidingWindowParams
+{
+  int stride = 3;                      ///< pixels between window centres
+  std::vector<float> scales{1.f};      ///< window extents over the trained extent
 };
 
 /** Everything a model needs to be applied as it was trained. */
@@ -44,9 +61,13 @@ struct DetectorSettings
 {
   PipelineParams pipeline;
   PatchParams patch;
+  DetectorKind detector = DetectorKind::Agex;  ///< models without the field are AGEX models
+  SlidingWindowParams sliding_window;          ///< used by sliding-window models only
   nlohmann::json toJson () const;
   /** \throws std::runtime_error on a malformed settings object */
   static DetectorSettings fromJson (const nlohmann::json &doc);
+  /** \throws std::runtime_error naming model_path when detector is not expected */
+  void requireDetector (DetectorKind expected, const std::string &model_path) const;
 };
 
 /** Depth patches of interest points (in order) on the pipeline's filtered frame. */
@@ -70,12 +91,44 @@ void collectTrainingSamples (const PipelineResult &prepared, const std::vector<P
                              int random_negatives, const PatchParams &patch, std::mt19937_64 &rng,
                              std::vector<agex::DepthPatch> &patches, std::vector<int> &classes);
 
+/** \brief Sliding-window training examples from one labelled frame, all upright:
+  * per visible tip, the mesh pixel nearest to it in 3D (within radius) and up to jitter more
+  * random mesh pixels within jitter_radius of the tip (positives of the tip's class; a
+  * window stride apart from the tip must still fire), and random_negatives random mesh
+  * pixels farther than 1.5 radius from every tip (background, label -1). */
+void collectWindowTrainingSamples (const PipelineResult &prepared, const std::vector<PartLabel> &labels,
+                                   float radius, int jitter, float jitter_radius, int random_negatives,
+                                   const PatchParams &patch, std::mt19937_64 &rng,
+                                   std::vector<agex::DepthPatch> &patches, std::vector<int> &classes);
+/** A box in pixels: [u0, u1) x [v0, v1). */
+struct PixelBox
+{
+  float u0 = 0.f, v0 = 0.f, u1 = 0.f, v1 = 0.f;
+};
+
+/** The physical side (metres) of a body part's box for the overlap criterion: head 0.25,
+  * hand 0.15, foot 0.20 (doc/results.md). */
+float partBoxSide (BodyPart part);
+
+/** The square of partBoxSide (part) * scale metres at depth z, projected with focal length
+  * focal (pixels), centred on pixel (u, v) (the pixel's centre is u + 0.5, v + 0.5). */
+PixelBox partBox (BodyPart part, float u, float v, float z, float scale, float focal);
+
+/** Intersection over union of two boxes (0 if either is empty). */
+float intersectionOverUnion (const PixelBox &a, const PixelBox &b);
+
 /** \brief The paper's detection evaluation: a detection is correct when it names the class
-  * of a labelled tip within radius that no more confident detection took. */
+  * of a labelled tip that matches it and that no more confident detection took. Matching
+  * is either distance (the tip within radius of the detection, 3D; the nearest wins) or box
+  * overlap (the part's box around the tip and the detection's box, partBox, overlap with
+  * intersection over union above min_iou; the largest overlap wins). */
 class DetectionEvaluation
 {
 public:
+  /** The distance criterion. */
   explicit DetectionEvaluation (float radius) : radius_ (radius) {}
+  /** The box-overlap criterion, boxes projected with focal length focal (pixels). */
+  static DetectionEvaluation boxOverlap (float min_iou, float focal);
   void addFrame (const std::vector<Detection> &detections, const std::vector<PartLabel> &labels);
   /** Average precision of a class (area under the interpolated precision-recall curve). */
   double averagePrecision (BodyPart part) const;
@@ -89,12 +142,19 @@ public:
   nlohmann::json report (float confusion_threshold) const;
 
 private:
+  /** How well d fits l under the criterion (larger is better); negative: no match. */
+  float matchQuality (const Detection &d, const PartLabel &l) const;
+  /** The label (any class) that d fits best, or -1. */
+  int bestLabel (const Detection &d, const std::vector<PartLabel> &labels) const;
+
   struct Scored
   {
     float confidence;
     bool correct;
   };
   float radius_;
+  float min_iou_ = 0.f;  ///< > 0: the box-overlap criterion
+  float focal_ = 0.f;
   int frames_ = 0;
   std::array<std::vector<Scored>, kBodyPartCount> scored_;
   std::array<int, kBodyPartCount> positives_{};

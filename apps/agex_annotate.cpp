@@ -12,12 +12,16 @@
 #include <agex/classification/imglab_dataset.h>
 #include <agex/common/atomic_file.h>
 
+#include <pcl/PCLPointCloud2.h>
+#include <pcl/common/io.h>
 #include <pcl/io/pcd_io.h>
 
 #include <boost/program_options.hpp>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 
+#include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -85,13 +89,15 @@ annotateCoco (int argc, char **argv)
   CommonOptions common;
   std::string json_path, images_dir;
   int min_keypoints = 0;
+  std::vector<std::string> only;
   po::options_description options ("agex_annotate coco --json FILE --images DIR --out XML [options]\n"
                                    "Contour landmarks from COCO person polygons and keypoints");
   options.add (commonDescription (common));
   options.add_options () ("json", po::value (&json_path)->required (), "COCO annotations (polygon segmentation)")
     ("images", po::value (&images_dir)->required (), "folder with the images")
     ("min-keypoints", po::value (&min_keypoints)->default_value (min_keypoints),
-     "people with fewer labelled keypoints become ignore boxes");
+     "people with fewer labelled keypoints become ignore boxes")
+    ("only", po::value (&only)->multitoken (), "annotate only these image files (file_name in the JSON)");
   if (!agex::apps::parseCommandLine (argc, argv, options, {}))
     return 0;
   agex::checkOutputIsNotInput (common.out, {json_path});
@@ -121,6 +127,8 @@ annotateCoco (int argc, char **argv)
   for (const auto &entry : coco["images"])
   {
     const std::string file = entry.at ("file_name").get<std::string> ();
+    if (!only.empty () && std::find (only.begin (), only.end (), file) == only.end ())
+      continue;
     const std::string path = (fs::path (images_dir) / file).string ();
     const cv::Mat image = cv::imread (path, cv::IMREAD_COLOR);
     if (image.empty ())
@@ -185,7 +193,8 @@ annotateRgbd (int argc, char **argv)
   CommonOptions common;
   std::vector<std::string> inputs;
   std::string images_dir;
-  float min_person_m = 1.0f, max_person_m = 2.3f;
+  float min_person_m = 1.0f, max_person_m = 2.3f, max_width_m = 2.0f, max_depth_m = 1.2f;
+  int max_people = 0;
   agex::apps::PipelineParams params;
   // People anywhere in a room, not only at the Bonn distance.
   params.crop_min = Eigen::Vector3f (-6.f, -3.f, 0.5f);
@@ -193,12 +202,17 @@ annotateRgbd (int argc, char **argv)
   std::vector<std::string> vector_flags;
   po::options_description options ("agex_annotate rgbd INPUT... --out XML [options]\n"
                                    "Contour landmarks from organized XYZRGBA clouds (.pcd): the depth stages segment\n"
-                                   "each person, AGEX extrema anchor the landmarks on the colour silhouette");
+                                   "each person, AGEX extrema anchor the landmarks on the colour silhouette. Clouds\n"
+                                   "without colour (agex_synth frames) give a shaded depth image instead.");
   options.add (commonDescription (common));
   options.add_options () ("input", po::value (&inputs)->multitoken (), "organized XYZRGBA PCD files")
     ("images-dir", po::value (&images_dir), "where the colour images are written (default: <out>_images)")
     ("min-person-height", po::value (&min_person_m)->default_value (min_person_m), "metres; shorter meshes are not people")
-    ("max-person-height", po::value (&max_person_m)->default_value (max_person_m), "metres; taller meshes are not people");
+    ("max-person-height", po::value (&max_person_m)->default_value (max_person_m), "metres; taller meshes are not people")
+    ("max-person-width", po::value (&max_width_m)->default_value (max_width_m), "metres; wider meshes are not people")
+    ("max-person-depth", po::value (&max_depth_m)->default_value (max_depth_m), "metres; deeper meshes are not people")
+    ("max-people", po::value (&max_people)->default_value (max_people),
+     "keep the nearest N people per frame (0: all), e.g. 1 for agex_synth frames");
   options.add (agex::apps::pipelineOptionsDescription (params, vector_flags));
   po::positional_options_description positional;
   positional.add ("input", -1);
@@ -218,6 +232,13 @@ annotateRgbd (int argc, char **argv)
   std::size_t annotated = 0;
   for (const std::string &input : inputs)
   {
+    pcl::PCLPointCloud2 header;
+    pcl::PCDReader reader;
+    if (reader.readHeader (input, header) < 0)
+      throw std::runtime_error (input + ": cannot read the PCD file");
+    bool has_colour = false;
+    for (const auto &field : header.fields)
+      has_colour = has_colour || field.name == "rgb" || field.name == "rgba";
     pcl::PointCloud<pcl::PointXYZRGBA> cloud;
     if (pcl::io::loadPCDFile (input, cloud) < 0)
       throw std::runtime_error (input + ": cannot read the PCD file");
@@ -231,33 +252,54 @@ annotateRgbd (int argc, char **argv)
       for (int u = 0; u < width; ++u)
       {
         const auto &p = cloud.at (u, v);
-        colour.at<cv::Vec3b> (v, u) = cv::Vec3b (p.b, p.g, p.r);
+        if (has_colour)
+          colour.at<cv::Vec3b> (v, u) = cv::Vec3b (p.b, p.g, p.r);
+        else
+        {
+          // Depth-only frames (agex_synth) get shaded depth: near bright, 1 m of depth per
+          // 50 grey levels, no measurement black.
+          const double grey = std::isfinite (p.z) ? std::clamp (255.0 - 50.0 * p.z, 30.0, 255.0) : 0.0;
+          colour.at<cv::Vec3b> (v, u) = cv::Vec3b::all (static_cast<unsigned char> (grey));
+        }
       }
     const agex::apps::PipelineResult result = agex::apps::runDepthPipeline (xyz, params);
 
-    std::vector<agex::ContourAnnotation> drawn;
-    agex::ImglabImage image;
+    // Candidates with their mean depth: with --max-people, the nearest ones are kept.
+    std::vector<std::pair<float, agex::ContourAnnotation>> candidates;
     for (std::size_t m = 0; m < result.meshes.size (); ++m)
     {
       cv::Mat mask = cv::Mat::zeros (height, width, CV_8UC1);
-      float y_min = std::numeric_limits<float>::max (), y_max = -y_min;
+      Eigen::Array3f sum = Eigen::Array3f::Zero ();
+      Eigen::Array3f low = Eigen::Array3f::Constant (std::numeric_limits<float>::max ()), high = -low;
       for (const int index : result.meshes[m].indices)
       {
         mask.at<unsigned char> (index / width, index % width) = 255;
-        const float y = result.filtered->points[index].y;
-        y_min = std::min (y_min, y);
-        y_max = std::max (y_max, y);
+        const Eigen::Array3f p = result.filtered->points[index].getArray3fMap ();
+        sum += p;
+        low = low.min (p);
+        high = high.max (p);
       }
-      // A person stands between min and max height (camera y is roughly vertical).
-      if (y_max - y_min < min_person_m || y_max - y_min > max_person_m)
+      // A person is as tall as a person (camera y is roughly vertical), and not a wall.
+      const Eigen::Array3f extent = high - low;
+      if (extent.y () < min_person_m || extent.y () > max_person_m || extent.x () > max_width_m ||
+          extent.z () > max_depth_m)
         continue;
       agex::ContourAnchors anchors;
       for (const auto &p : result.interest_points)
         if (p.mesh == static_cast<int> (m) && p.rank > 1)
           anchors.extremities.emplace_back (static_cast<float> (p.u), static_cast<float> (p.v));
       const agex::ContourAnnotation annotation = agex::annotateContour (mask, anchors);
-      if (!annotation.ok)
-        continue;
+      if (annotation.ok)
+        candidates.emplace_back (sum.z () / result.meshes[m].indices.size (), annotation);
+    }
+    std::sort (candidates.begin (), candidates.end (),
+               [] (const auto &a, const auto &b) { return a.first < b.first; });
+    std::vector<agex::ContourAnnotation> drawn;
+    agex::ImglabImage image;
+    for (const auto &[depth, annotation] : candidates)
+    {
+      if (max_people > 0 && static_cast<int> (drawn.size ()) >= max_people)
+        break;
       if (annotation.tight_box.height < common.min_height)
       {
         image.boxes.push_back ({annotation.box, "person", true, {}});

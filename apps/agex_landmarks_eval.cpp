@@ -20,7 +20,8 @@ namespace po = boost::program_options;
 int
 main (int argc, char **argv)
 {
-  std::string dataset_path, model_path, detector_path, json_path, overlay_dir;
+  std::vector<std::string> dataset_paths;
+  std::string model_path, detector_path, json_path, overlay_dir;
   int folds = 0;
   bool train_detector = false, no_detector = false;
   agex::ShapePredictorTrainingParams shape_params;
@@ -30,7 +31,7 @@ main (int argc, char **argv)
                                    "the true contour, detection recall (IoU > 0.5) and time per image. Landmarks\n"
                                    "are predicted in the true boxes so that the two errors stay apart.");
   general.add_options () ("help,h", "show this help")
-    ("dataset", po::value (&dataset_path)->required (), "imglab XML with contour landmarks")
+    ("dataset", po::value (&dataset_paths)->multitoken ()->required (), "imglab XML files with contour landmarks")
     ("model", po::value (&model_path), "shape predictor to evaluate")
     ("detector", po::value (&detector_path), "people detector (default: OpenCV's HOG people detector)")
     ("no-detector", po::bool_switch (&no_detector), "skip detection")
@@ -49,10 +50,14 @@ main (int argc, char **argv)
     if (folds == 1 || folds < 0)
       throw std::runtime_error ("--folds needs at least 2 folds");
     if (!json_path.empty ())
-      agex::checkOutputIsNotInput (json_path, {dataset_path, model_path, detector_path});
-    const auto images = agex::apps::loadLandmarkDataset (dataset_path);
+    {
+      std::vector<std::string> read = dataset_paths;
+      read.insert (read.end (), {model_path, detector_path});
+      agex::checkOutputIsNotInput (json_path, read);
+    }
+    const auto images = agex::apps::loadLandmarkDatasets (dataset_paths);
     if (folds > static_cast<int> (images.size ()))
-      throw std::runtime_error (dataset_path + " has " + std::to_string (images.size ()) + " images, fewer than " +
+      throw std::runtime_error ("the dataset has " + std::to_string (images.size ()) + " images, fewer than " +
                                 std::to_string (folds) + " folds");
 
     // Each fold: the models to test and the images to test them on.
@@ -105,7 +110,7 @@ main (int argc, char **argv)
       }
 
     nlohmann::json doc = pooled.json ();
-    doc["dataset"] = dataset_path;
+    doc["dataset"] = dataset_paths;
     if (folds > 0)
     {
       doc["folds"] = folds;

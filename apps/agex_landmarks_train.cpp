@@ -16,13 +16,14 @@ namespace po = boost::program_options;
 int
 main (int argc, char **argv)
 {
-  std::string dataset_path, model_path, detector_path;
+  std::vector<std::string> dataset_paths;
+  std::string model_path, detector_path;
   agex::ShapePredictorTrainingParams shape_params;
   agex::PeopleDetectorTrainingParams detector_params;
   po::options_description general ("agex_landmarks_train --dataset XML --out MODEL [--detector-out FILE] [options]\n"
                                    "Trains the 180-landmark contour shape predictor (and the people detector)");
   general.add_options () ("help,h", "show this help")
-    ("dataset", po::value (&dataset_path)->required (), "imglab XML with contour landmarks (agex_annotate)")
+    ("dataset", po::value (&dataset_paths)->multitoken ()->required (), "imglab XML files with contour landmarks (agex_annotate)")
     ("out", po::value (&model_path)->required (), "shape predictor model to write")
     ("detector-out", po::value (&detector_path), "also train the people detector and write it here");
   po::options_description all;
@@ -31,16 +32,20 @@ main (int argc, char **argv)
   {
     if (!agex::apps::parseCommandLine (argc, argv, all, {}))
       return 0;
-    agex::checkOutputIsNotInput (model_path, {dataset_path});
+    agex::checkOutputIsNotInput (model_path, dataset_paths);
     if (!detector_path.empty ())
-      agex::checkOutputIsNotInput (detector_path, {dataset_path, model_path});
-    const auto images = agex::apps::loadLandmarkDataset (dataset_path);
+    {
+      std::vector<std::string> read = dataset_paths;
+      read.push_back (model_path);
+      agex::checkOutputIsNotInput (detector_path, read);
+    }
+    const auto images = agex::apps::loadLandmarkDatasets (dataset_paths);
     std::vector<std::size_t> all_images (images.size ());
     std::iota (all_images.begin (), all_images.end (), 0);
     std::size_t people = 0;
     for (const auto &image : images)
       people += image.people.size ();
-    std::cout << dataset_path << ": " << images.size () << " images, " << people << " people\n";
+    std::cout << "dataset: " << images.size () << " images, " << people << " people\n";
 
     shape_params.verbose = true;  // dlib reports the cascade levels as it goes
     auto start = std::chrono::steady_clock::now ();

@@ -66,6 +66,18 @@ loadLandmarkDataset (const std::string &xml_path)
   return images;
 }
 
+std::vector<AnnotatedImage>
+loadLandmarkDatasets (const std::vector<std::string> &xml_paths)
+{
+  std::vector<AnnotatedImage> images;
+  for (const std::string &path : xml_paths)
+  {
+    std::vector<AnnotatedImage> more = loadLandmarkDataset (path);
+    std::move (more.begin (), more.end (), std::back_inserter (images));
+  }
+  return images;
+}
+
 po::options_description
 shapeTrainerOptions (ShapePredictorTrainingParams &p)
 {

@@ -40,6 +40,8 @@ extern const char *const kShoulderPartNames[2];
 /** Loads an imglab dataset of contour landmarks and its images (grey).
   * \throws std::runtime_error naming the file and the problem */
 std::vector<AnnotatedImage> loadLandmarkDataset (const std::string &xml_path);
+/** Several datasets, their images in the order given. */
+std::vector<AnnotatedImage> loadLandmarkDatasets (const std::vector<std::string> &xml_paths);
 
 /** Flags of dlib's shape predictor trainer (defaults from params). */
 boost::program_options::options_description shapeTrainerOptions (ShapePredictorTrainingParams &params);

@@ -21,6 +21,7 @@ int
 main (int argc, char **argv)
 {
   std::vector<std::string> dataset_paths;
+  std::vector<std::string> extra_paths;
   std::string model_path, detector_path, json_path, overlay_dir;
   int folds = 0;
   bool train_detector = false, no_detector = false;
@@ -36,6 +37,8 @@ main (int argc, char **argv)
     ("detector", po::value (&detector_path), "people detector (default: OpenCV's HOG people detector)")
     ("no-detector", po::bool_switch (&no_detector), "skip detection")
     ("folds", po::value (&folds)->default_value (0), "cross-validate by image: image i is in fold i mod K")
+    ("train-also", po::value (&extra_paths)->multitoken (),
+     "with --folds: imglab XML files added to every fold's training set, never tested")
     ("train-detector", po::bool_switch (&train_detector), "with --folds: train a detector per fold too")
     ("json", po::value (&json_path), "write the results here")
     ("overlay-dir", po::value (&overlay_dir), "write a PNG per image with the predicted landmarks here");
@@ -55,9 +58,14 @@ main (int argc, char **argv)
       read.insert (read.end (), {model_path, detector_path});
       agex::checkOutputIsNotInput (json_path, read);
     }
-    const auto images = agex::apps::loadLandmarkDatasets (dataset_paths);
-    if (folds > static_cast<int> (images.size ()))
-      throw std::runtime_error ("the dataset has " + std::to_string (images.size ()) + " images, fewer than " +
+    auto images = agex::apps::loadLandmarkDatasets (dataset_paths);
+    const std::size_t tested_images = images.size ();
+    {
+      std::vector<agex::apps::AnnotatedImage> extra = agex::apps::loadLandmarkDatasets (extra_paths);
+      std::move (extra.begin (), extra.end (), std::back_inserter (images));
+    }
+    if (folds > static_cast<int> (tested_images))
+      throw std::runtime_error ("the dataset has " + std::to_string (tested_images) + " images, fewer than " +
                                 std::to_string (folds) + " folds");
 
     // Each fold: the models to test and the images to test them on.
@@ -90,7 +98,7 @@ main (int argc, char **argv)
     if (folds == 0)
     {
       const agex::ContourShapePredictor predictor = agex::ContourShapePredictor::load (model_path);
-      std::vector<std::size_t> test (images.size ());
+      std::vector<std::size_t> test (tested_images);
       std::iota (test.begin (), test.end (), 0);
       evaluate (predictor, given_detector.get (), test);
     }
@@ -99,7 +107,7 @@ main (int argc, char **argv)
       {
         std::vector<std::size_t> train, test;
         for (std::size_t i = 0; i < images.size (); ++i)
-          (static_cast<int> (i % folds) == f ? test : train).push_back (i);
+          (i < tested_images && static_cast<int> (i % folds) == f ? test : train).push_back (i);
         std::cerr << "fold " << f + 1 << "/" << folds << ": training on " << train.size () << " images\n";
         const agex::ContourShapePredictor predictor = agex::apps::trainShapePredictor (images, train, shape_params);
         std::unique_ptr<agex::PeopleDetector> fold_detector;
@@ -114,6 +122,7 @@ main (int argc, char **argv)
     if (folds > 0)
     {
       doc["folds"] = folds;
+      doc["train_also"] = extra_paths;
       doc["per_fold"] = fold_results;
       doc["detector"] = no_detector ? "none" : train_detector ? "fhog trained per fold" : given_detector->description ();
     }

@@ -20,7 +20,7 @@ namespace agex
 namespace
 {
 using Scanner = dlib::scan_fhog_pyramid<dlib::pyramid_down<6>>;
-constexpr char kMagic[] = "agex_people_detector_fhog 1";
+constexpr char kMagic[] = "agex_people_detector_fhog 2";
 
 dlib::rectangle
 toDlib (const cv::Rect &r)
@@ -40,6 +40,7 @@ struct PeopleDetector::Impl
 {
   bool opencv_default = false;
   int upsample = 0;
+  double scale = 1.0;
   dlib::object_detector<Scanner> fhog;
   cv::HOGDescriptor hog;
 };
@@ -55,13 +56,21 @@ PeopleDetector::train (const std::vector<cv::Mat> &grey_images, const std::vecto
 {
   if (grey_images.size () != boxes.size () || grey_images.empty ())
     throw std::invalid_argument ("people detector training: one box list per image needed");
+  if (!(params.scale > 0.05 && params.scale <= 4.0))
+    throw std::invalid_argument ("people detector training: scale must lie in (0.05, 4]");
   dlib::array<dlib::array2d<unsigned char>> images (grey_images.size ());
   std::vector<std::vector<dlib::rectangle>> targets (grey_images.size ());
   for (std::size_t i = 0; i < grey_images.size (); ++i)
   {
-    dlib::assign_image (images[i], dlib::cv_image<unsigned char> (toGrey (grey_images[i])));
+    cv::Mat grey = toGrey (grey_images[i]);
+    if (params.scale != 1.0)
+      cv::resize (grey, grey, cv::Size (), params.scale, params.scale, cv::INTER_AREA);
+    dlib::assign_image (images[i], dlib::cv_image<unsigned char> (grey));
     for (const cv::Rect &box : boxes[i])
-      targets[i].push_back (toDlib (box));
+      targets[i].push_back (toDlib (cv::Rect (cv::Point (static_cast<int> (std::lround (box.x * params.scale)),
+                                                         static_cast<int> (std::lround (box.y * params.scale))),
+                                              cv::Size (static_cast<int> (std::lround (box.width * params.scale)),
+                                                        static_cast<int> (std::lround (box.height * params.scale))))));
   }
   for (int u = 0; u < params.upsample; ++u)
     dlib::upsample_image_dataset<dlib::pyramid_down<2>> (images, targets);
@@ -92,6 +101,7 @@ PeopleDetector::train (const std::vector<cv::Mat> &grey_images, const std::vecto
   PeopleDetector detector;
   detector.impl_ = std::make_unique<Impl> ();
   detector.impl_->upsample = params.upsample;
+  detector.impl_->scale = params.scale;
   detector.impl_->fhog = trainer.train (images, targets, removed);
   return detector;
 }
@@ -122,9 +132,14 @@ PeopleDetector::load (const std::string &path)
   try
   {
     int upsample = 0;
+    double scale = 1.0;
     dlib::deserialize (upsample, in);
+    dlib::deserialize (scale, in);
     dlib::deserialize (detector.impl_->fhog, in);
+    if (upsample < 0 || upsample > 4 || !(scale > 0.05 && scale <= 4.0))
+      throw std::runtime_error ("bad upsample or scale");
     detector.impl_->upsample = upsample;
+    detector.impl_->scale = scale;
   }
   catch (const std::exception &e)
   {
@@ -141,6 +156,7 @@ PeopleDetector::save (const std::string &path) const
   std::ostringstream out;
   out << kMagic << "\n";
   dlib::serialize (impl_->upsample, out);
+  dlib::serialize (impl_->scale, out);
   dlib::serialize (impl_->fhog, out);
   writeFileAtomic (path, out.str ());
 }
@@ -160,7 +176,8 @@ PeopleDetector::description () const
     return "OpenCV HOG people detector (Dalal-Triggs, 64x128)";
   const Scanner &scanner = impl_->fhog.get_scanner ();
   return "fhog detector, window " + std::to_string (scanner.get_detection_window_width ()) + "x" +
-         std::to_string (scanner.get_detection_window_height ()) + ", upsample " + std::to_string (impl_->upsample);
+         std::to_string (scanner.get_detection_window_height ()) + ", upsample " + std::to_string (impl_->upsample) +
+         ", scale " + std::to_string (impl_->scale);
 }
 
 std::vector<PersonDetection>
@@ -189,17 +206,20 @@ PeopleDetector::detect (const cv::Mat &image, double threshold) const
     return people;
   }
   std::vector<dlib::rect_detection> detections;
+  cv::Mat resized = grey;
+  if (impl_->scale != 1.0)
+    cv::resize (grey, resized, cv::Size (), impl_->scale, impl_->scale, cv::INTER_AREA);
   if (impl_->upsample == 0)
-    impl_->fhog (dlib::cv_image<unsigned char> (grey), detections, threshold);
+    impl_->fhog (dlib::cv_image<unsigned char> (resized), detections, threshold);
   else
   {
     dlib::array2d<unsigned char> scaled;
-    dlib::assign_image (scaled, dlib::cv_image<unsigned char> (grey));
+    dlib::assign_image (scaled, dlib::cv_image<unsigned char> (resized));
     for (int u = 0; u < impl_->upsample; ++u)
       dlib::pyramid_up (scaled);
     impl_->fhog (scaled, detections, threshold);
   }
-  const double scale = 1.0 / (1 << impl_->upsample);
+  const double scale = 1.0 / ((1 << impl_->upsample) * impl_->scale);
   for (const dlib::rect_detection &d : detections)
   {
     cv::Rect box = toCv (d.rect);

@@ -108,6 +108,7 @@ detectorTrainerOptions (PeopleDetectorTrainingParams &p)
     ("detector-window-width", po::value (&p.window_width)->default_value (p.window_width), "detection window width (pixels)")
     ("detector-window-height", po::value (&p.window_height)->default_value (p.window_height), "detection window height (pixels)")
     ("detector-upsample", po::value (&p.upsample)->default_value (p.upsample), "times to double the images (finds smaller people, slower)")
+    ("detector-scale", po::value (&p.scale)->default_value (p.scale), "resize images by this before detection (below 1: faster, misses small people)")
     ("detector-flips", po::value (&p.add_flips)->default_value (p.add_flips), "add left-right mirrored training images");
   return options;
 }

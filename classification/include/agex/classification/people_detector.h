@@ -19,6 +19,10 @@ struct PeopleDetectorTrainingParams
   int window_width = 100;
   int window_height = 100;
   int upsample = 0;        ///< times the training images (and detection) are doubled
+  /** Images are resized by this factor before training and detection: below 1 trades
+    * the smallest people found for speed (window 70x70 at 0.7 finds people as small
+    * as 100x100 at 1.0, in about half the time). */
+  double scale = 1.0;
   bool add_flips = true;   ///< add left-right mirrored training images
   unsigned long num_threads = 0;  ///< 0: one per core
   bool verbose = false;

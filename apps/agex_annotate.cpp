@@ -195,6 +195,7 @@ annotateRgbd (int argc, char **argv)
   std::string images_dir;
   float min_person_m = 1.0f, max_person_m = 2.3f, max_width_m = 2.0f, max_depth_m = 1.2f;
   int max_people = 0;
+  double max_fill = 0.8;
   agex::apps::PipelineParams params;
   // People anywhere in a room, not only at the Bonn distance.
   params.crop_min = Eigen::Vector3f (-6.f, -3.f, 0.5f);
@@ -211,8 +212,10 @@ annotateRgbd (int argc, char **argv)
     ("max-person-height", po::value (&max_person_m)->default_value (max_person_m), "metres; taller meshes are not people")
     ("max-person-width", po::value (&max_width_m)->default_value (max_width_m), "metres; wider meshes are not people")
     ("max-person-depth", po::value (&max_depth_m)->default_value (max_depth_m), "metres; deeper meshes are not people")
+    ("max-fill", po::value (&max_fill)->default_value (max_fill),
+     "silhouettes filling more of their box are not people (wall strips, boxes)")
     ("max-people", po::value (&max_people)->default_value (max_people),
-     "keep the nearest N people per frame (0: all), e.g. 1 for agex_synth frames");
+     "keep the N most central people per frame (0: all), e.g. 1 for agex_synth frames");
   options.add (agex::apps::pipelineOptionsDescription (params, vector_flags));
   po::positional_options_description positional;
   positional.add ("input", -1);
@@ -264,18 +267,17 @@ annotateRgbd (int argc, char **argv)
       }
     const agex::apps::PipelineResult result = agex::apps::runDepthPipeline (xyz, params);
 
-    // Candidates with their mean depth: with --max-people, the nearest ones are kept.
+    // Candidates with their distance from the image centre: with --max-people, the most central
+    // are kept (a camera looks at its subject; side walls and furniture sit at the edges).
     std::vector<std::pair<float, agex::ContourAnnotation>> candidates;
     for (std::size_t m = 0; m < result.meshes.size (); ++m)
     {
       cv::Mat mask = cv::Mat::zeros (height, width, CV_8UC1);
-      Eigen::Array3f sum = Eigen::Array3f::Zero ();
       Eigen::Array3f low = Eigen::Array3f::Constant (std::numeric_limits<float>::max ()), high = -low;
       for (const int index : result.meshes[m].indices)
       {
         mask.at<unsigned char> (index / width, index % width) = 255;
         const Eigen::Array3f p = result.filtered->points[index].getArray3fMap ();
-        sum += p;
         low = low.min (p);
         high = high.max (p);
       }
@@ -289,8 +291,14 @@ annotateRgbd (int argc, char **argv)
         if (p.mesh == static_cast<int> (m) && p.rank > 1)
           anchors.extremities.emplace_back (static_cast<float> (p.u), static_cast<float> (p.v));
       const agex::ContourAnnotation annotation = agex::annotateContour (mask, anchors);
-      if (annotation.ok)
-        candidates.emplace_back (sum.z () / result.meshes[m].indices.size (), annotation);
+      const double fill = annotation.ok ? cv::countNonZero (mask (annotation.tight_box & cv::Rect (0, 0, width, height))) /
+                                            std::max (1.0, static_cast<double> (annotation.tight_box.area ()))
+                                        : 1.0;
+      if (annotation.ok && fill <= max_fill)
+        candidates.emplace_back (
+          static_cast<float> (cv::norm ((annotation.tight_box.tl () + annotation.tight_box.br ()) * 0.5 -
+                                        cv::Point (width / 2, height / 2))),
+          annotation);
     }
     std::sort (candidates.begin (), candidates.end (),
                [] (const auto &a, const auto &b) { return a.first < b.first; });

@@ -193,10 +193,20 @@ annotateContour (const cv::Mat &mask, const ContourAnchors &anchors, const Conto
     std::vector<cv::Point2f> rest = anchors.extremities;
     std::sort (rest.begin (), rest.end (),
                [&] (const cv::Point2f &a, const cv::Point2f &b) { return height_of (a) > height_of (b); });
-    if (!known (hints.head) && top - height_of (rest.front ()) < 0.15f * body_height)
+    if (!known (hints.head))
     {
-      hints.head = rest.front ();
-      rest.erase (rest.begin ());
+      // Raised hands can be higher than the head: of the extremities near the top, the
+      // head is the one nearest the body's middle.
+      auto head = rest.end ();
+      for (auto it = rest.begin (); it != rest.end () && top - height_of (*it) < 0.25f * body_height; ++it)
+        if (head == rest.end () ||
+            std::abs (lateral_of (*it) - lateral_of (centroid)) < std::abs (lateral_of (*head) - lateral_of (centroid)))
+          head = it;
+      if (head != rest.end ())
+      {
+        hints.head = *head;
+        rest.erase (head);
+      }
     }
     const float middle = bottom + 0.5f * body_height;
     std::vector<cv::Point2f> feet, hands;
@@ -214,7 +224,7 @@ annotateContour (const cv::Mat &mask, const ContourAnchors &anchors, const Conto
   int head = -1;
   if (known (hints.head))
   {
-    const float radius = 0.2f * body_height;
+    const float radius = 0.12f * body_height;  // about a head; wider would reach raised hands
     head = argmaxOnContour (contour, height_of, [&] (int i) {
       return cv::norm (cv::Point2f (contour[i]) - hints.head) < radius;
     });

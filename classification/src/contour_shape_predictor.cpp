@@ -3,6 +3,8 @@
 #include <agex/classification/contour_shape_predictor.h>
 #include <agex/common/atomic_file.h>
 
+#include "dlib_rect.h"
+
 #include <dlib/image_processing/shape_predictor_trainer.h>
 #include <dlib/opencv/cv_image.h>
 
@@ -26,11 +28,7 @@ ContourShapePredictor &ContourShapePredictor::operator= (ContourShapePredictor &
 
 namespace
 {
-dlib::rectangle
-toDlib (const cv::Rect &r)
-{
-  return dlib::rectangle (r.x, r.y, r.x + r.width - 1, r.y + r.height - 1);
-}
+using detail::toDlib;
 
 dlib::full_object_detection
 toDetection (const cv::Rect &box, const std::vector<cv::Point2f> &shape)

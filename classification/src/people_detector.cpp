@@ -3,6 +3,8 @@
 #include <agex/classification/people_detector.h>
 #include <agex/common/atomic_file.h>
 
+#include "dlib_rect.h"
+
 #include <dlib/image_processing.h>
 #include <dlib/image_transforms/image_pyramid.h>
 #include <dlib/opencv/cv_image.h>
@@ -19,21 +21,12 @@ namespace agex
 {
 namespace
 {
+using detail::toDlib;
+using detail::toCv;
 using Scanner = dlib::scan_fhog_pyramid<dlib::pyramid_down<6>>;
 constexpr char kMagic[] = "agex_people_detector_fhog 2";
 
-dlib::rectangle
-toDlib (const cv::Rect &r)
-{
-  return dlib::rectangle (r.x, r.y, r.x + r.width - 1, r.y + r.height - 1);
-}
 
-cv::Rect
-toCv (const dlib::rectangle &r)
-{
-  return cv::Rect (static_cast<int> (r.left ()), static_cast<int> (r.top ()), static_cast<int> (r.width ()),
-                   static_cast<int> (r.height ()));
-}
 }  // namespace
 
 struct PeopleDetector::Impl

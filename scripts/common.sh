@@ -13,6 +13,7 @@ AGEX_PACKAGES=(
   libboost-program-options-dev
   nlohmann-json3-dev
   libgtest-dev
+  libdlib-dev
 )
 
 agex_install_dependencies () {

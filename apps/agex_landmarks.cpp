@@ -1,0 +1,144 @@
+// agex_landmarks: people boxes and 180 body-contour landmarks per person in images, a
+// video or a camera. Uses the bundled model and OpenCV's people detector unless told
+// otherwise.
+
+#include <agex/apps/command_line.h>
+#include <agex/apps/landmarks.h>
+#include <agex/apps/output.h>
+#include <agex/common/atomic_file.h>
+
+#include <boost/program_options.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/videoio.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <iostream>
+
+namespace po = boost::program_options;
+
+namespace
+{
+double
+msSince (std::chrono::steady_clock::time_point start)
+{
+  return std::chrono::duration<double, std::milli> (std::chrono::steady_clock::now () - start).count ();
+}
+
+struct FrameResult
+{
+  std::vector<agex::apps::LandmarkedPerson> people;
+  double detect_ms = 0, landmarks_ms = 0;
+};
+
+FrameResult
+processFrame (const cv::Mat &image, const agex::PeopleDetector &detector, const agex::ContourShapePredictor &predictor,
+              double threshold)
+{
+  FrameResult result;
+  const cv::Mat grey = agex::toGrey (image);
+  auto start = std::chrono::steady_clock::now ();
+  const std::vector<agex::PersonDetection> detections = detector.detect (grey, threshold);
+  result.detect_ms = msSince (start);
+  start = std::chrono::steady_clock::now ();
+  for (const agex::PersonDetection &d : detections)
+    result.people.push_back ({d.box, d.score, predictor.predict (grey, d.box)});
+  result.landmarks_ms = msSince (start);
+  return result;
+}
+
+nlohmann::json
+frameJson (const std::string &source, const FrameResult &result)
+{
+  nlohmann::json people = nlohmann::json::array ();
+  for (const auto &person : result.people)
+    people.push_back (agex::apps::landmarkedPersonJson (person));
+  return {{"source", source}, {"people", people}, {"ms", {{"detect", result.detect_ms}, {"landmarks", result.landmarks_ms}}}};
+}
+}  // namespace
+
+int
+main (int argc, char **argv)
+{
+  std::vector<std::string> inputs;
+  std::string model_path = AGEX_BUNDLED_LANDMARK_MODEL, detector_path, json_path, overlay_path, video;
+  double threshold = 0.0;
+  int max_frames = 0, repeat = 1;
+  po::options_description general ("agex_landmarks INPUT... [options]\n"
+                                   "People boxes and 180 body-contour landmarks per person");
+  general.add_options () ("help,h", "show this help") ("input", po::value (&inputs)->multitoken (), "image files")
+    ("model", po::value (&model_path)->default_value (model_path), "shape predictor (agex_landmarks_train)")
+    ("detector", po::value (&detector_path), "people detector (default: OpenCV's HOG people detector)")
+    ("threshold", po::value (&threshold)->default_value (threshold), "detection threshold (higher: fewer, surer people)")
+    ("json", po::value (&json_path), "write boxes and landmarks as JSON here")
+    ("overlay", po::value (&overlay_path), "write an overlay PNG here (the last image or frame)")
+    ("video", po::value (&video), "a video file, or a camera number, processed frame by frame")
+    ("max-frames", po::value (&max_frames)->default_value (0), "stop a video after this many frames (0: all)")
+    ("repeat", po::value (&repeat)->default_value (repeat),
+     "process each image N times and report the fastest run of each stage (timing on a busy machine)");
+  po::positional_options_description positional;
+  positional.add ("input", -1);
+  try
+  {
+    if (!agex::apps::parseCommandLine (argc, argv, general, positional))
+      return 0;
+    if (inputs.empty () && video.empty ())
+      throw std::runtime_error ("no INPUT image or --video given (see --help)");
+    std::vector<std::string> read = inputs;
+    read.push_back (model_path);
+    if (!video.empty ())
+      read.push_back (video);
+    for (const auto &out : {json_path, overlay_path})
+      if (!out.empty ())
+        agex::checkOutputIsNotInput (out, read);
+    const agex::ContourShapePredictor predictor = agex::ContourShapePredictor::load (model_path);
+    const agex::PeopleDetector detector =
+      detector_path.empty () ? agex::PeopleDetector::openCvDefault () : agex::PeopleDetector::load (detector_path);
+
+    nlohmann::json frames = nlohmann::json::array ();
+    cv::Mat last_image;
+    FrameResult last;
+    auto report = [&] (const std::string &source, const cv::Mat &image, FrameResult result) {
+      std::cout << source << ": " << result.people.size () << " people, detect " << result.detect_ms << " ms, landmarks "
+                << result.landmarks_ms << " ms\n";
+      frames.push_back (frameJson (source, result));
+      last_image = image;
+      last = std::move (result);
+    };
+    for (const std::string &input : inputs)
+    {
+      const cv::Mat image = cv::imread (input, cv::IMREAD_COLOR);
+      if (image.empty ())
+        throw std::runtime_error (input + ": cannot read the image");
+      FrameResult best = processFrame (image, detector, predictor, threshold);
+      for (int r = 1; r < repeat; ++r)
+      {
+        const FrameResult again = processFrame (image, detector, predictor, threshold);
+        best.detect_ms = std::min (best.detect_ms, again.detect_ms);
+        best.landmarks_ms = std::min (best.landmarks_ms, again.landmarks_ms);
+      }
+      report (input, image, std::move (best));
+    }
+    if (!video.empty ())
+    {
+      cv::VideoCapture capture;
+      const bool camera = !video.empty () && std::all_of (video.begin (), video.end (), ::isdigit);
+      if (camera ? !capture.open (std::stoi (video)) : !capture.open (video))
+        throw std::runtime_error (video + ": cannot open the video or camera");
+      cv::Mat frame;
+      for (int n = 0; (max_frames == 0 || n < max_frames) && capture.read (frame) && !frame.empty (); ++n)
+        report (video + "#" + std::to_string (n), frame.clone (), processFrame (frame, detector, predictor, threshold));
+    }
+    nlohmann::json doc = {{"model", model_path}, {"detector", detector.description ()}, {"frames", frames}};
+    if (!json_path.empty ())
+      agex::apps::writeJson (json_path, doc);
+    if (!overlay_path.empty () && !last_image.empty ())
+      agex::apps::writePng (overlay_path, agex::apps::renderLandmarkOverlay (last_image, last.people));
+    return 0;
+  }
+  catch (const std::exception &e)
+  {
+    std::cerr << "agex_landmarks: error: " << e.what () << "\n";
+    return 1;
+  }
+}

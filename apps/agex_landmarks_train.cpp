@@ -1,0 +1,82 @@
+// agex_landmarks_train: trains the contour shape predictor (and, when asked, the people
+// detector) on an imglab dataset of 180-landmark contours (agex_annotate writes them).
+
+#include <agex/apps/command_line.h>
+#include <agex/apps/landmarks.h>
+#include <agex/common/atomic_file.h>
+
+#include <boost/program_options.hpp>
+
+#include <chrono>
+#include <iostream>
+#include <numeric>
+
+namespace po = boost::program_options;
+
+int
+main (int argc, char **argv)
+{
+  std::vector<std::string> dataset_paths;
+  std::string model_path, detector_path;
+  agex::ShapePredictorTrainingParams shape_params;
+  agex::PeopleDetectorTrainingParams detector_params;
+  po::options_description general ("agex_landmarks_train --dataset XML --out MODEL [--detector-out FILE] [options]\n"
+                                   "Trains the 180-landmark contour shape predictor (and the people detector)");
+  general.add_options () ("help,h", "show this help")
+    ("dataset", po::value (&dataset_paths)->multitoken ()->required (), "imglab XML files with contour landmarks (agex_annotate)")
+    ("out", po::value (&model_path)->required (), "shape predictor model to write")
+    ("detector-out", po::value (&detector_path), "also train the people detector and write it here");
+  po::options_description all;
+  all.add (general).add (agex::apps::shapeTrainerOptions (shape_params)).add (agex::apps::detectorTrainerOptions (detector_params));
+  try
+  {
+    if (!agex::apps::parseCommandLine (argc, argv, all, {}))
+      return 0;
+    agex::checkOutputIsNotInput (model_path, dataset_paths);
+    if (!detector_path.empty ())
+    {
+      std::vector<std::string> read = dataset_paths;
+      read.push_back (model_path);
+      agex::checkOutputIsNotInput (detector_path, read);
+    }
+    const auto images = agex::apps::loadLandmarkDatasets (dataset_paths);
+    std::vector<std::size_t> all_images (images.size ());
+    std::iota (all_images.begin (), all_images.end (), 0);
+    std::size_t people = 0;
+    for (const auto &image : images)
+      people += image.people.size ();
+    std::cout << "dataset: " << images.size () << " images, " << people << " people\n";
+
+    shape_params.verbose = true;  // dlib reports the cascade levels as it goes
+    auto start = std::chrono::steady_clock::now ();
+    const agex::ContourShapePredictor predictor = agex::apps::trainShapePredictor (images, all_images, shape_params);
+    predictor.save (model_path);
+    const double train_s = std::chrono::duration<double> (std::chrono::steady_clock::now () - start).count ();
+    agex::apps::LandmarkEvaluation training_fit;
+    for (const auto &image : images)
+      training_fit.add (image, predictor, nullptr);
+    const auto fit = training_fit.json ();
+    std::cout << model_path << ": trained in " << train_s << " s; mean training error " << fit["mean_error_px"]
+              << " px (" << fit["mean_error_box_height"] << " of the box height)\n";
+
+    if (!detector_path.empty ())
+    {
+      detector_params.verbose = true;
+      std::size_t ignored = 0;
+      const agex::PeopleDetector detector =
+        agex::apps::trainPeopleDetector (images, all_images, detector_params, &ignored);
+      detector.save (detector_path);
+      agex::apps::LandmarkEvaluation detection;
+      for (const auto &image : images)
+        detection.add (image, predictor, &detector);
+      std::cout << detector_path << ": " << ignored << " boxes the window cannot match were ignored; training recall "
+                << detection.json ()["detection_recall"] << "\n";
+    }
+    return 0;
+  }
+  catch (const std::exception &e)
+  {
+    std::cerr << "agex_landmarks_train: error: " << e.what () << "\n";
+    return 1;
+  }
+}

@@ -1,0 +1,286 @@
+#include <agex/apps/landmarks.h>
+
+#include <agex/classification/contour_annotation.h>
+
+#include <boost/program_options/value_semantic.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include <chrono>
+#include <stdexcept>
+
+namespace po = boost::program_options;
+
+namespace agex
+{
+namespace apps
+{
+const char *const kShoulderPartNames[2] = {"left_shoulder", "right_shoulder"};
+
+std::vector<AnnotatedImage>
+loadLandmarkDataset (const std::string &xml_path)
+{
+  const ImglabDataset dataset = readImglabDataset (xml_path);
+  std::vector<AnnotatedImage> images;
+  for (const ImglabImage &entry : dataset.images)
+  {
+    AnnotatedImage image;
+    image.path = resolveImglabImagePath (xml_path, entry.file);
+    image.grey = cv::imread (image.path, cv::IMREAD_GRAYSCALE);
+    if (image.grey.empty ())
+      throw std::runtime_error (xml_path + ": cannot read its image " + image.path);
+    for (const ImglabBox &box : entry.boxes)
+    {
+      AnnotatedPerson person;
+      person.box = box.rect;
+      person.landmarks.resize (kContourLandmarkCount);
+      int found = 0;
+      for (const auto &[name, p] : box.parts)
+      {
+        const int index = contourLandmarkIndex (name);
+        if (index >= 0)
+        {
+          person.landmarks[index] = p;
+          ++found;
+        }
+      }
+      if (box.ignore || found != kContourLandmarkCount)
+      {
+        if (found != 0 && found != kContourLandmarkCount && !box.ignore)
+          throw std::runtime_error (xml_path + ": a box in " + entry.file + " has " + std::to_string (found) + " of the " +
+                                    std::to_string (kContourLandmarkCount) + " contour landmarks (parts 000-179)");
+        image.ignored.push_back (box.rect);
+        continue;
+      }
+      const auto a = box.parts.find (kShoulderPartNames[0]), b = box.parts.find (kShoulderPartNames[1]);
+      if (a != box.parts.end () && b != box.parts.end ())
+      {
+        person.has_shoulders = true;
+        person.shoulders[0] = a->second;
+        person.shoulders[1] = b->second;
+      }
+      image.people.push_back (std::move (person));
+    }
+    images.push_back (std::move (image));
+  }
+  return images;
+}
+
+std::vector<AnnotatedImage>
+loadLandmarkDatasets (const std::vector<std::string> &xml_paths)
+{
+  std::vector<AnnotatedImage> images;
+  for (const std::string &path : xml_paths)
+  {
+    std::vector<AnnotatedImage> more = loadLandmarkDataset (path);
+    std::move (more.begin (), more.end (), std::back_inserter (images));
+  }
+  return images;
+}
+
+po::options_description
+shapeTrainerOptions (ShapePredictorTrainingParams &p)
+{
+  po::options_description options ("Shape predictor training (dlib::shape_predictor_trainer)");
+  options.add_options ()
+    ("oversampling", po::value (&p.oversampling_amount)->default_value (p.oversampling_amount), "random initial shapes per training person")
+    ("translation-jitter", po::value (&p.oversampling_translation_jitter)->default_value (p.oversampling_translation_jitter), "random box shift of the oversampled copies (fraction of the box)")
+    ("nu", po::value (&p.nu)->default_value (p.nu), "shrinkage (learning rate) of each tree")
+    ("tree-depth", po::value (&p.tree_depth)->default_value (p.tree_depth), "depth of each regression tree")
+    ("cascade-depth", po::value (&p.cascade_depth)->default_value (p.cascade_depth), "cascade levels")
+    ("trees-per-level", po::value (&p.num_trees_per_cascade_level)->default_value (p.num_trees_per_cascade_level), "trees per cascade level")
+    ("feature-pool-size", po::value (&p.feature_pool_size)->default_value (p.feature_pool_size), "pixels sampled per cascade level")
+    ("feature-pool-padding", po::value (&p.feature_pool_region_padding)->default_value (p.feature_pool_region_padding), "how far outside the shape pixels may be sampled (fraction of the box)")
+    ("lambda", po::value (&p.lambda)->default_value (p.lambda), "prior favouring close pixel pairs")
+    ("test-splits", po::value (&p.num_test_splits)->default_value (p.num_test_splits), "random splits tried per tree node")
+    ("seed", po::value (&p.random_seed)->default_value (p.random_seed), "random seed (string)")
+    ("threads", po::value (&p.num_threads)->default_value (p.num_threads), "training threads (0: one per core)");
+  return options;
+}
+
+po::options_description
+detectorTrainerOptions (PeopleDetectorTrainingParams &p)
+{
+  po::options_description options ("People detector training (dlib::structural_object_detection_trainer, fhog)");
+  options.add_options ()
+    ("detector-c", po::value (&p.c)->default_value (p.c), "SVM C")
+    ("detector-epsilon", po::value (&p.epsilon)->default_value (p.epsilon), "SVM stopping tolerance")
+    ("detector-window-width", po::value (&p.window_width)->default_value (p.window_width), "detection window width (pixels)")
+    ("detector-window-height", po::value (&p.window_height)->default_value (p.window_height), "detection window height (pixels)")
+    ("detector-upsample", po::value (&p.upsample)->default_value (p.upsample), "times to double the images (finds smaller people, slower)")
+    ("detector-scale", po::value (&p.scale)->default_value (p.scale), "resize images by this before detection (below 1: faster, misses small people)")
+    ("detector-flips", po::value (&p.add_flips)->default_value (p.add_flips), "add left-right mirrored training images");
+  return options;
+}
+
+ContourShapePredictor
+trainShapePredictor (const std::vector<AnnotatedImage> &images, const std::vector<std::size_t> &which,
+                     ShapePredictorTrainingParams params)
+{
+  std::vector<LandmarkTrainingImage> training;
+  for (const std::size_t i : which)
+  {
+    LandmarkTrainingImage t;
+    t.grey = images.at (i).grey;
+    for (const AnnotatedPerson &person : images[i].people)
+    {
+      t.boxes.push_back (person.box);
+      t.shapes.push_back (person.landmarks);
+    }
+    training.push_back (std::move (t));
+  }
+  params.mirror_map.resize (kContourLandmarkCount);
+  for (int i = 0; i < kContourLandmarkCount; ++i)
+    params.mirror_map[i] = mirroredContourLandmark (i);
+  return ContourShapePredictor::train (training, params);
+}
+
+PeopleDetector
+trainPeopleDetector (const std::vector<AnnotatedImage> &images, const std::vector<std::size_t> &which,
+                     const PeopleDetectorTrainingParams &params, std::size_t *ignored)
+{
+  std::vector<cv::Mat> greys;
+  std::vector<std::vector<cv::Rect>> boxes;
+  for (const std::size_t i : which)
+  {
+    greys.push_back (images.at (i).grey);
+    boxes.emplace_back ();
+    for (const AnnotatedPerson &person : images[i].people)
+      boxes.back ().push_back (person.box);
+  }
+  return PeopleDetector::train (greys, boxes, params, ignored);
+}
+
+namespace
+{
+double
+msSince (std::chrono::steady_clock::time_point start)
+{
+  return std::chrono::duration<double, std::milli> (std::chrono::steady_clock::now () - start).count ();
+}
+}  // namespace
+
+void
+LandmarkEvaluation::add (const AnnotatedImage &image, const ContourShapePredictor &predictor,
+                         const PeopleDetector *detector)
+{
+  ++images_;
+  auto start = std::chrono::steady_clock::now ();
+  for (const AnnotatedPerson &person : image.people)
+  {
+    const std::vector<cv::Point2f> predicted = predictor.predict (image.grey, person.box);
+    if (predicted.size () != person.landmarks.size ())
+      throw std::runtime_error ("the model predicts " + std::to_string (predicted.size ()) + " landmarks, the dataset has " +
+                                std::to_string (person.landmarks.size ()));
+    double error = 0;
+    for (std::size_t i = 0; i < predicted.size (); ++i)
+      error += cv::norm (predicted[i] - person.landmarks[i]);
+    error /= predicted.size ();
+    ++people_;
+    sum_error_px_ += error;
+    sum_error_box_ += error / std::max (1, person.box.height);
+    if (person.has_shoulders)
+    {
+      const double shoulder_width = cv::norm (person.shoulders[0] - person.shoulders[1]);
+      if (shoulder_width > 1.0)
+      {
+        ++shoulder_people_;
+        sum_error_shoulder_ += error / shoulder_width;
+      }
+    }
+    sum_contour_ += meanDistanceToClosedPolyline (predicted, person.landmarks);
+  }
+  landmark_ms_ += msSince (start);
+  if (!detector)
+    return;
+  ++detect_images_;
+  start = std::chrono::steady_clock::now ();
+  const std::vector<PersonDetection> detections = detector->detect (image.grey);
+  detect_ms_ += msSince (start);
+  // Greedy one-to-one matching, best overlaps first.
+  std::vector<bool> used (detections.size (), false);
+  for (const AnnotatedPerson &person : image.people)
+  {
+    ++truths_;
+    int best = -1;
+    double best_iou = 0.5;
+    for (std::size_t d = 0; d < detections.size (); ++d)
+    {
+      const double iou = boxIoU (person.box, detections[d].box);
+      if (!used[d] && iou > best_iou)
+      {
+        best_iou = iou;
+        best = static_cast<int> (d);
+      }
+    }
+    if (best >= 0)
+    {
+      used[best] = true;
+      ++found_;
+    }
+  }
+}
+
+nlohmann::json
+LandmarkEvaluation::json () const
+{
+  auto mean = [] (double sum, std::size_t n) -> nlohmann::json {
+    if (n == 0)
+      return nullptr;
+    return sum / n;
+  };
+  nlohmann::json doc;
+  doc["images"] = images_;
+  doc["people"] = people_;
+  doc["mean_error_px"] = mean (sum_error_px_, people_);
+  doc["mean_error_box_height"] = mean (sum_error_box_, people_);
+  doc["mean_error_shoulder_width"] = mean (sum_error_shoulder_, shoulder_people_);
+  doc["people_with_shoulders"] = shoulder_people_;
+  doc["mean_contour_distance_px"] = mean (sum_contour_, people_);
+  doc["detection_recall"] = mean (static_cast<double> (found_), truths_);
+  doc["ms_per_image"] = {{"detect", mean (detect_ms_, detect_images_)}, {"landmarks", mean (landmark_ms_, images_)}};
+  doc["ms_per_person_landmarks"] = mean (landmark_ms_, people_);
+  return doc;
+}
+
+cv::Mat
+renderLandmarkOverlay (const cv::Mat &image, const std::vector<LandmarkedPerson> &people)
+{
+  cv::Mat canvas;
+  if (image.channels () == 1)
+    cv::cvtColor (image, canvas, cv::COLOR_GRAY2BGR);
+  else if (image.channels () == 4)
+    cv::cvtColor (image, canvas, cv::COLOR_BGRA2BGR);
+  else
+    canvas = image.clone ();
+  const int radius = std::max (1, std::min (canvas.cols, canvas.rows) / 250);
+  for (const LandmarkedPerson &person : people)
+  {
+    cv::rectangle (canvas, person.box, cv::Scalar (255, 255, 255), 1);
+    const int n = static_cast<int> (person.landmarks.size ());
+    for (int i = 0; i < n; ++i)
+    {
+      // Hue runs round the body with the landmark index (red at the head top).
+      cv::Mat hsv (1, 1, CV_8UC3, cv::Scalar (static_cast<double> (170 * i / std::max (1, n)), 255, 255)), bgr;
+      cv::cvtColor (hsv, bgr, cv::COLOR_HSV2BGR);
+      const cv::Vec3b c = bgr.at<cv::Vec3b> (0, 0);
+      cv::line (canvas, person.landmarks[i], person.landmarks[(i + 1) % n], cv::Scalar (c[0], c[1], c[2]), 1, cv::LINE_AA);
+      cv::circle (canvas, person.landmarks[i], i == 0 ? 3 * radius : radius, cv::Scalar (c[0], c[1], c[2]), cv::FILLED,
+                  cv::LINE_AA);
+    }
+  }
+  return canvas;
+}
+
+nlohmann::json
+landmarkedPersonJson (const LandmarkedPerson &person)
+{
+  nlohmann::json points = nlohmann::json::array ();
+  for (const cv::Point2f &p : person.landmarks)
+    points.push_back ({p.x, p.y});
+  return {{"box", {{"x", person.box.x}, {"y", person.box.y}, {"width", person.box.width}, {"height", person.box.height}}},
+          {"score", person.score},
+          {"landmarks", points}};
+}
+}  // namespace apps
+}  // namespace agex

@@ -1,0 +1,70 @@
+#pragma once
+// People boxes in an image: HOG features and a linear SVM over a sliding window, trained
+// with dlib's structural_object_detection_trainer on scan_fhog_pyramid; without a trained
+// model, OpenCV's pretrained Dalal-Triggs people detector. Plain OpenCV types only.
+
+#include <opencv2/core.hpp>
+
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace agex
+{
+/** Training parameters; defaults are the seed's choices. */
+struct PeopleDetectorTrainingParams
+{
+  double c = 0.65;
+  double epsilon = 0.01;
+  int window_width = 100;
+  int window_height = 100;
+  int upsample = 0;        ///< times the training images (and detection) are doubled
+  /** Images are resized by this factor before training and detection: below 1 trades
+    * the smallest people found for speed (window 70x70 at 0.7 finds people as small
+    * as 100x100 at 1.0, in about half the time). */
+  double scale = 1.0;
+  bool add_flips = true;   ///< add left-right mirrored training images
+  unsigned long num_threads = 0;  ///< 0: one per core
+  bool verbose = false;
+};
+
+struct PersonDetection
+{
+  cv::Rect box;  ///< square, like the training boxes of agex_annotate
+  double score = 0.0;
+};
+
+class PeopleDetector
+{
+public:
+  PeopleDetector ();
+  ~PeopleDetector ();
+  PeopleDetector (PeopleDetector &&) noexcept;
+  PeopleDetector &operator= (PeopleDetector &&) noexcept;
+
+  /** Trains on grey images with their people boxes; boxes the window cannot match
+    * (too small, wrong shape, overlapping) are ignored and counted in *ignored.
+    * \throws std::invalid_argument when nothing is left to train on */
+  static PeopleDetector train (const std::vector<cv::Mat> &grey_images, const std::vector<std::vector<cv::Rect>> &boxes,
+                               const PeopleDetectorTrainingParams &params, std::size_t *ignored = nullptr);
+  /** OpenCV's pretrained people detector (64x128 window, INRIA people). */
+  static PeopleDetector openCvDefault ();
+  /** \throws std::runtime_error naming the file when it is missing or not a detector */
+  static PeopleDetector load (const std::string &path);
+  /** Writes the trained detector atomically. \throws std::logic_error for the fallback */
+  void save (const std::string &path) const;
+
+  bool isOpenCvDefault () const;
+  std::string description () const;
+
+  /** People in an image (grey or BGR); threshold shifts the SVM's decision value. */
+  std::vector<PersonDetection> detect (const cv::Mat &image, double threshold = 0.0) const;
+
+private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+/** Intersection over union of two boxes. */
+double boxIoU (const cv::Rect &a, const cv::Rect &b);
+}  // namespace agex

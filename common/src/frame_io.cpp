@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <sstream>
 
 namespace fs = std::filesystem;
 
@@ -35,7 +36,7 @@ fail (const std::string &path, const std::string &problem)
 void
 checkFrameSize (const std::string &path, std::uint64_t width, std::uint64_t height)
 {
-  if (width * height > kMaxFramePixels)
+  if (width > kMaxFramePixels || height > kMaxFramePixels || width * height > kMaxFramePixels)
     fail (path, "claims a " + std::to_string (width) + "x" + std::to_string (height) +
                     " frame, more than the " + std::to_string (kMaxFramePixels) + " pixels agex reads");
 }
@@ -80,9 +81,35 @@ checkPcdFields (const std::string &path, const pcl::PCLPointCloud2 &cloud)
   }
 }
 
+/** PCL's header parser allocates the cloud the POINTS line claims before returning: the
+  * sizes are checked here first, from the header text. */
+void
+checkPcdHeaderSizes (const std::string &path)
+{
+  std::ifstream in (path, std::ios::binary);
+  std::uint64_t width = 0, height = 1, points = 0;
+  std::string line;
+  for (int lines = 0; lines < 64 && std::getline (in, line); ++lines)
+  {
+    std::istringstream words (line);
+    std::string key;
+    words >> key;
+    std::uint64_t *value = key == "WIDTH" ? &width : key == "HEIGHT" ? &height : key == "POINTS" ? &points : nullptr;
+    if (value && !(words >> *value))
+      *value = 0;  // PCL reports malformed numbers itself
+    if (key == "DATA")
+      break;
+  }
+  checkFrameSize (path, width, height);
+  if (points > kMaxFramePixels)
+    fail (path, "claims " + std::to_string (points) + " points, more than the " + std::to_string (kMaxFramePixels) +
+                    " pixels agex reads");
+}
+
 pcl::PCLPointCloud2
 readPCD (const std::string &path)
 {
+  checkPcdHeaderSizes (path);
   pcl::PCDReader reader;
   pcl::PCLPointCloud2 header;
   Eigen::Vector4f origin;

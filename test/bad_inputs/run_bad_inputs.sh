@@ -93,6 +93,16 @@ check "truncated dataset.json" 1 "ds_truncated_json/dataset.json: not valid JSON
 check "dataset of another format version" 1 "version 2 is not supported" $E coverage --dataset in/ds_version2 --json out/a.json
 check "labels.csv cut in the middle of a line" 1 "labels.csv:2: expected 15 comma-separated fields" $E coverage --dataset in/ds_truncated_labels --json out/a.json
 check "dataset frame of the wrong size" 1 "wall_176x144.pcd: is 48x64, the dataset says 176x144" $E coverage --dataset in/ds_wrong_frame_size --json out/a.json
+# Training and synthesis.
+printf 'HIERARCHY\nROOT Hips\n{\n  OFFSET 0 0 0\n  CHANNELS 6 Xposition Yposition\n' > in/truncated.bvh
+(cd in && find . -type f -print0 | sort -z | xargs -0 sha256sum) > inputs.sha256
+S=$BIN/agex_synth
+check "truncated BVH motion" 1 "truncated.bvh:5: " $S --motion in/truncated.bvh --frames 3 --sensor sr4000 --output out/synth
+check "missing BVH motion" 1 "nope.bvh: cannot open BVH file" $S --motion in/nope.bvh --frames 3 --output out/synth
+check "unknown sensor" 1 "unknown --sensor .nosuch." $S --motion in/truncated.bvh --frames 3 --sensor nosuch --output out/synth
+check "train on a dataset without labels" 1 "training on 0 patches from 0 frames" $T --dataset in/dataset --out out/model.yml
+check "train on a damaged labels.csv" 1 "labels.csv:2: expected 15" $T --dataset in/ds_truncated_labels --out out/model.yml
+[ ! -e out/synth ] && [ ! -e out/model.yml ] || { echo "FAILED: a failed run left an output" >&2; failures=$((failures + 1)); }
 # Outputs.
 echo previous > out/kept.json
 check "failing run, earlier output in the way" 1 "truncated.png" $D in/truncated.png --json out/kept.json

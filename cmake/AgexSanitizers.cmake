@@ -3,7 +3,12 @@
 # (-fno-sanitize-recover) so that a test hitting it fails instead of printing a warning.
 # Runtime options and suppressions: test/sanitizers/ (ctest sets them, see test/CMakeLists.txt).
 if(AGEX_SANITIZE)
-  set(AGEX_SANITIZER_FLAGS -fsanitize=address,undefined -fno-sanitize-recover=undefined -fno-omit-frame-pointer)
+  # EIGEN_MALLOC_ALREADY_ALIGNED=1: Eigen switches to its own aligned allocator when it sees
+  # AddressSanitizer (__SANITIZE_ADDRESS__), which then frees memory that the system PCL (built
+  # without it) allocated with plain malloc: a false heap-buffer-overflow in every cloud passed
+  # across. Keeping the system's allocator choice keeps the two ABI compatible.
+  set(AGEX_SANITIZER_FLAGS -fsanitize=address,undefined -fno-sanitize-recover=undefined -fno-omit-frame-pointer
+      -DEIGEN_MALLOC_ALREADY_ALIGNED=1)
   add_compile_options(${AGEX_SANITIZER_FLAGS})
   add_link_options(-fsanitize=address,undefined)
   # For projects built against this build (test/consumer), which must link the runtimes too.
@@ -20,7 +25,7 @@ if(AGEX_BUILD_FUZZERS)
     message(FATAL_ERROR "AGEX_BUILD_FUZZERS needs AGEX_BUILD_TESTS=ON (the fuzzers live in test/fuzz)")
   endif()
   add_compile_options(-fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=undefined
-                      -fno-omit-frame-pointer -g)
+                      -fno-omit-frame-pointer -g -DEIGEN_MALLOC_ALREADY_ALIGNED=1)  # see above
   add_link_options(-fsanitize=address,undefined)
 endif()
 

@@ -1,7 +1,8 @@
 # AGEX_SANITIZE=ON: everything (libraries, apps, tests) is built with AddressSanitizer
 # (LeakSanitizer included) and UndefinedBehaviorSanitizer. Undefined behaviour aborts
 # (-fno-sanitize-recover) so that a test hitting it fails instead of printing a warning.
-# Runtime options and suppressions: test/sanitizers/ (ctest sets them, see test/CMakeLists.txt).
+# Runtime options and suppressions: test/sanitizers/, compiled into every executable
+# (agex_use_sanitizer_defaults below).
 if(AGEX_SANITIZE)
   # EIGEN_MALLOC_ALREADY_ALIGNED=1: Eigen switches to its own aligned allocator when it sees
   # AddressSanitizer (__SANITIZE_ADDRESS__), which then frees memory that the system PCL (built

@@ -12,6 +12,7 @@
 #include <fstream>
 #include <limits>
 #include <sstream>
+#include <vector>
 
 namespace fs = std::filesystem;
 
@@ -81,14 +82,16 @@ checkPcdFields (const std::string &path, const pcl::PCLPointCloud2 &cloud)
   }
 }
 
-/** PCL's header parser allocates the cloud the POINTS line claims before returning: the
-  * sizes are checked here first, from the header text. */
+/** PCL's header parser allocates the cloud the POINTS line claims before returning, and
+  * its binary_compressed reader the uncompressed size the data claims: the sizes are
+  * checked here first, from the file itself. */
 void
 checkPcdHeaderSizes (const std::string &path)
 {
   std::ifstream in (path, std::ios::binary);
-  std::uint64_t width = 0, height = 1, points = 0;
-  std::string line;
+  std::uint64_t width = 0, height = 1, points = 0, point_step = 0;
+  std::vector<std::uint64_t> sizes, counts;
+  std::string line, data;
   for (int lines = 0; lines < 64 && std::getline (in, line); ++lines)
   {
     std::istringstream words (line);
@@ -97,13 +100,30 @@ checkPcdHeaderSizes (const std::string &path)
     std::uint64_t *value = key == "WIDTH" ? &width : key == "HEIGHT" ? &height : key == "POINTS" ? &points : nullptr;
     if (value && !(words >> *value))
       *value = 0;  // PCL reports malformed numbers itself
+    std::vector<std::uint64_t> *list = key == "SIZE" ? &sizes : key == "COUNT" ? &counts : nullptr;
+    for (std::uint64_t v = 0; list && words >> v;)
+      list->push_back (v);
     if (key == "DATA")
+    {
+      words >> data;
       break;
+    }
   }
   checkFrameSize (path, width, height);
   if (points > kMaxFramePixels)
     fail (path, "claims " + std::to_string (points) + " points, more than the " + std::to_string (kMaxFramePixels) +
                     " pixels agex reads");
+  for (std::size_t i = 0; i < sizes.size (); ++i)
+    point_step += std::min<std::uint64_t> (sizes[i], 8) * std::min<std::uint64_t> (i < counts.size () ? counts[i] : 1, 1u << 20);
+  if (data == "binary_compressed")
+  {
+    std::uint32_t compressed = 0, uncompressed = 0;
+    in.read (reinterpret_cast<char *> (&compressed), 4);
+    in.read (reinterpret_cast<char *> (&uncompressed), 4);
+    if (in && uncompressed != width * height * point_step)
+      fail (path, "compressed PCD data claims " + std::to_string (uncompressed) + " bytes, the header " +
+                      std::to_string (width * height * point_step) + " (corrupted)");
+  }
 }
 
 pcl::PCLPointCloud2

@@ -10,6 +10,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <limits>
 #include <sstream>
 #include <vector>
@@ -91,6 +92,7 @@ checkPcdHeaderSizes (const std::string &path)
   std::ifstream in (path, std::ios::binary);
   std::uint64_t width = 0, height = 1, points = 0, point_step = 0;
   std::vector<std::uint64_t> sizes, counts;
+  std::vector<std::string> types;
   std::string line, data;
   for (int lines = 0; lines < 64 && std::getline (in, line); ++lines)
   {
@@ -101,8 +103,12 @@ checkPcdHeaderSizes (const std::string &path)
     if (value && !(words >> *value))
       *value = 0;  // PCL reports malformed numbers itself
     std::vector<std::uint64_t> *list = key == "SIZE" ? &sizes : key == "COUNT" ? &counts : nullptr;
+    if (list)
+      list->clear ();  // a repeated line replaces the earlier one, as in PCL
     for (std::uint64_t v = 0; list && words >> v;)
       list->push_back (v);
+    if (key == "TYPE")
+      types.assign (std::istream_iterator<std::string> (words), std::istream_iterator<std::string> ());
     if (key == "DATA")
     {
       words >> data;
@@ -113,6 +119,18 @@ checkPcdHeaderSizes (const std::string &path)
   if (points > kMaxFramePixels)
     fail (path, "claims " + std::to_string (points) + " points, more than the " + std::to_string (kMaxFramePixels) +
                     " pixels agex reads");
+  // PCL's ascii reader writes each value with the size of its TYPE into a slot of the
+  // size of its SIZE: they must agree (F: 4 or 8 bytes; I, U: 1, 2, 4 or 8).
+  for (std::size_t i = 0; i < std::min (sizes.size (), types.size ()); ++i)
+  {
+    const std::uint64_t size = sizes[i];
+    const bool valid = types[i] == "F" ? (size == 4 || size == 8)
+                                       : (types[i] == "I" || types[i] == "U") &&
+                                             (size == 1 || size == 2 || size == 4 || size == 8);
+    if (!valid)
+      fail (path, "PCD field " + std::to_string (i + 1) + " has TYPE " + types[i] + " and SIZE " +
+                      std::to_string (size) + " (damaged SIZE or TYPE line)");
+  }
   for (std::size_t i = 0; i < sizes.size (); ++i)
     point_step += std::min<std::uint64_t> (sizes[i], 8) * std::min<std::uint64_t> (i < counts.size () ? counts[i] : 1, 1u << 20);
   if (data == "binary_compressed")

@@ -16,6 +16,14 @@ function(agex_add_module name)
   target_compile_options(${target} PRIVATE -Wall -Wextra)
   set_target_properties(${target} PROPERTIES OUTPUT_NAME agex_${name} EXPORT_NAME ${name}
     VERSION ${PROJECT_VERSION} SOVERSION ${PROJECT_VERSION_MAJOR}.${PROJECT_VERSION_MINOR})
+  # Installed as agex::<name> through agexConfig.cmake (top-level CMakeLists.txt), headers
+  # (impl/*.hpp included) under <prefix>/include/agex/<name>.
+  install(TARGETS ${target} EXPORT agexTargets
+    LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}
+    ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
+    RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
+  install(DIRECTORY ${CMAKE_CURRENT_SOURCE_DIR}/include/ DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}
+    FILES_MATCHING PATTERN "*.h" PATTERN "*.hpp")
 endfunction()
 
 # agex_add_app(<name> SOURCES ... DEPENDS ...): an executable in <build>/bin.
@@ -24,4 +32,6 @@ function(agex_add_app name)
   add_executable(${name} ${ARG_SOURCES})
   target_link_libraries(${name} PRIVATE ${ARG_DEPENDS})
   target_compile_options(${name} PRIVATE -Wall -Wextra)
+  agex_use_sanitizer_defaults(${name})
+  install(TARGETS ${name} RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
 endfunction()

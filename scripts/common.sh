@@ -5,7 +5,7 @@ AGEX_ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 AGEX_BUILD_DIR="${AGEX_BUILD_DIR:-$AGEX_ROOT/build}"
 AGEX_JOBS="${AGEX_JOBS:-$(nproc 2>/dev/null || echo 2)}"
 
-# Debian 12 packages agex builds and tests with.
+# Debian 12 packages agex builds and tests with (clang and its runtimes: the fuzzers).
 AGEX_PACKAGES=(
   g++ make cmake pkg-config
   libpcl-dev libeigen3-dev libflann-dev
@@ -14,6 +14,7 @@ AGEX_PACKAGES=(
   nlohmann-json3-dev
   libgtest-dev
   libdlib-dev
+  clang libclang-rt-14-dev
 )
 
 agex_install_dependencies () {

@@ -1,10 +1,35 @@
 #!/usr/bin/env bash
 # Sets everything up on a fresh Debian 12 machine, builds, and runs the whole
-# test suite with ctest. Exits non-zero on any failure. Tests that need the data
-# in ../shared skip, saying what is missing, when it is absent.
+# test suite with ctest, three times over:
+#   build/       the Release build, every test;
+#   build-asan/  every test again with AddressSanitizer (leaks included) and
+#                UndefinedBehaviorSanitizer (AGEX_SANITIZE=ON; skip with AGEX_SKIP_SANITIZE=1);
+#   build-fuzz/  each fuzz target for AGEX_FUZZ_SECONDS (default 10) seconds, when clang
+#                is installed (AGEX_BUILD_FUZZERS=ON; skip with AGEX_SKIP_FUZZ=1).
+# Exits non-zero on any failure. Tests that need the data in ../shared skip, saying
+# what is missing, when it is absent.
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 
 agex_install_dependencies
 agex_build -DAGEX_BUILD_TESTS=ON
 ctest --test-dir "$AGEX_BUILD_DIR" --output-on-failure -j "$AGEX_JOBS"
+
+if [ "${AGEX_SKIP_SANITIZE:-0}" != 1 ]; then
+  echo "agex: the whole suite again under AddressSanitizer + UndefinedBehaviorSanitizer"
+  AGEX_BUILD_DIR="$AGEX_ROOT/build-asan" agex_build -DAGEX_BUILD_TESTS=ON -DAGEX_SANITIZE=ON
+  ctest --test-dir "$AGEX_ROOT/build-asan" --output-on-failure -j "$AGEX_JOBS"
+fi
+
+if [ "${AGEX_SKIP_FUZZ:-0}" != 1 ]; then
+  if command -v clang++ >/dev/null && command -v clang >/dev/null; then
+    echo "agex: fuzzing each reader for ${AGEX_FUZZ_SECONDS:-10} s"
+    cmake -S "$AGEX_ROOT" -B "$AGEX_ROOT/build-fuzz" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+      -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ -DAGEX_BUILD_FUZZERS=ON \
+      -DAGEX_BUILD_APPS=OFF -DAGEX_FUZZ_SECONDS="${AGEX_FUZZ_SECONDS:-10}" >/dev/null
+    cmake --build "$AGEX_ROOT/build-fuzz" --target agex_fuzzers -j "$AGEX_JOBS"
+    ctest --test-dir "$AGEX_ROOT/build-fuzz" -L '^fuzz$' --output-on-failure -j "$AGEX_JOBS"
+  else
+    echo "agex: clang not found, fuzzers not run (the kept crashers were replayed above)"
+  fi
+fi

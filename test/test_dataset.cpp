@@ -13,7 +13,9 @@
 
 #include <nlohmann/json.hpp>
 
+#include <signal.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <cstdlib>
 #include <fstream>
@@ -409,6 +411,43 @@ TEST (DatasetWriter, WithoutCommitNothingIsLeftBehind)
   }
   EXPECT_EQ (readText (existing / "dataset.json"), json);
   EXPECT_EQ (agex::Dataset::read (existing.string ()).frames ().size (), 3u);
+  EXPECT_TRUE (stagingLeftovers (tmp.path ()).empty ()) << joined (stagingLeftovers (tmp.path ()));
+}
+
+TEST (DatasetWriter, AKilledWritersLeftoversAreCleanedAndItsMovedAsideDatasetRestored)
+{
+  // A writer killed with SIGKILL runs no destructor: its staging directory stays.
+  TempDir tmp;
+  const fs::path dir = tmp.path () / "killed";
+  const pid_t child = ::fork ();
+  ASSERT_GE (child, 0);
+  if (child == 0)
+  {
+    agex::DatasetWriter writer (dir.string (), smallInfo ());
+    writer.addFrame ("f0", "s", smallCloud (0), {});
+    ::raise (SIGKILL);
+  }
+  int status = 0;
+  ASSERT_EQ (::waitpid (child, &status, 0), child);
+  ASSERT_TRUE (WIFSIGNALED (status));
+  const auto left = entriesStartingWith (tmp.path (), ".killed.partial-" + std::to_string (child) + "-");
+  ASSERT_EQ (left.size (), 1u) << "the killed writer's staging directory, named with its pid";
+
+  // Killed inside commit (), after moving the previous dataset aside: simulated by
+  // moving a real dataset to the name commit () gives it.
+  SmallDataset small;
+  small.write (dir.string ());
+  const std::string json = readText (dir / "dataset.json");
+  fs::rename (dir, tmp.path () / (left[0] + ".old"));
+
+  // The next writer of that target cleans up: the staging directory goes, the
+  // dataset comes back, and the new writer proceeds as usual.
+  {
+    agex::DatasetWriter writer (dir.string (), smallInfo (), true);
+    EXPECT_EQ (readText (dir / "dataset.json"), json) << "the moved-aside dataset is back in place";
+    EXPECT_EQ (entriesStartingWith (tmp.path (), ".killed.partial-" + std::to_string (child) + "-").size (), 0u);
+  }
+  EXPECT_EQ (readText (dir / "dataset.json"), json);
   EXPECT_TRUE (stagingLeftovers (tmp.path ()).empty ()) << joined (stagingLeftovers (tmp.path ()));
 }
 

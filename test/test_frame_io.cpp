@@ -306,6 +306,51 @@ TEST (FrameIo, PcdErrors)
   }
 }
 
+TEST (FrameIo, HugeClaimedSizesAndDamagedFieldsAreRefusedBeforeReading)
+{
+  TempDir dir;
+  const std::string header = "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n";
+  // A PCD header claiming 100000 x 100000 points over a few bytes of data (PCL would
+  // allocate 120 GB for it), for each storage type.
+  for (const char *data : {"ascii", "binary", "binary_compressed"})
+  {
+    SCOPED_TRACE (data);
+    const std::string huge = dir.file ("huge.pcd");
+    writeAll (huge, header + "WIDTH 100000\nHEIGHT 100000\nPOINTS 10000000000\nDATA " + data + "\n0 0 1\n");
+    expectFrameError ([&] { agex::loadFrame (huge); }, {huge, "100000x100000", "pixels agex reads"});
+  }
+  // Within the limit, but more points than the file can hold.
+  const std::string short_ascii = dir.file ("short.pcd");
+  writeAll (short_ascii, header + "WIDTH 1000\nHEIGHT 1000\nPOINTS 1000000\nDATA ascii\n0 0 1\n");
+  expectFrameError ([&] { agex::loadFrame (short_ascii); }, {short_ascii, "does not match its header"});
+  // Fields that do not fit the point (a repeated SIZE line), and no WIDTH line.
+  const std::string bad_fields = dir.file ("fields.pcd");
+  writeAll (bad_fields, header + "SIZE 4 4 0\nWIDTH 2\nHEIGHT 2\nPOINTS 4\nDATA ascii\n0 0 1\n0 0 1\n0 0 1\n0 0 1\n");
+  expectFrameError ([&] { agex::loadFrame (bad_fields); }, {bad_fields});
+  const std::string no_width = dir.file ("no_width.pcd");
+  writeAll (no_width, header + "HEIGHT 3\nPOINTS 0\nDATA ascii\n");
+  expectFrameError ([&] { agex::loadFrame (no_width); }, {no_width});
+
+  // A PNG whose header claims 100000 x 100000 pixels.
+  cv::Mat small (4, 4, CV_8UC1, cv::Scalar (100));
+  std::vector<unsigned char> png;
+  ASSERT_TRUE (cv::imencode (".png", small, png));
+  for (int i : {16, 20})  // IHDR width, height (big-endian)
+  {
+    png[i] = 0x00, png[i + 1] = 0x01, png[i + 2] = 0x86, png[i + 3] = 0xa0;
+  }
+  const std::string huge_png = dir.file ("huge.png");
+  writeAll (huge_png, std::string (png.begin (), png.end ()));
+  expectFrameError ([&] { agex::loadFrame (huge_png); }, {huge_png, "100000x100000"});
+
+  // A raw frame said to be that large.
+  agex::FrameOptions options;
+  options.width = options.height = 100000;
+  const std::string raw = dir.file ("huge.u16");
+  writeAll (raw, "abcd");
+  expectFrameError ([&] { agex::loadFrame (raw, options); }, {raw, "100000x100000"});
+}
+
 TEST (FrameIo, MissingFileDirectoryAndUnknownFormat)
 {
   TempDir dir;

@@ -545,6 +545,9 @@ PatchClassifier::load (const std::string &path)
   }
   if (!fs.isOpened ())
     throw ModelError (path + ": damaged model file (cannot be parsed)");
+  // FileStorage::operator[] throws on a document that is not a mapping.
+  if (!fs.root ().isMap ())
+    throw ModelError (path + ": not an agex model (no 'format: " + kFormatName + "')");
 
   const cv::FileNode format = fs["format"];
   if (format.empty () || !format.isString () || static_cast<std::string> (format) != kFormatName)

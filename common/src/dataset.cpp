@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <charconv>
 #include <cmath>
+#include <cerrno>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -14,6 +15,9 @@
 #include <limits>
 #include <set>
 #include <sstream>
+
+#include <signal.h>
+#include <unistd.h>
 
 namespace fs = std::filesystem;
 
@@ -77,6 +81,35 @@ formatFloat (float v)
   std::ostringstream out;
   out << std::setprecision (7) << v;
   return out.str ();
+}
+
+/** A writer killed (SIGKILL, SIGTERM, power loss) before commit () or its destructor
+  * leaves its staging directory <prefix><pid>-XXXXXX beside the target, and, if killed
+  * inside commit (), the previous dataset moved aside as <prefix><pid>-XXXXXX.old. The
+  * next writer of the same target removes the first and puts the second back, once
+  * that process is gone. */
+void
+recoverInterruptedWriters (const fs::path &target, const std::string &prefix)
+{
+  std::error_code ec;
+  for (const auto &entry : fs::directory_iterator (target.parent_path (), ec))
+  {
+    const std::string name = entry.path ().filename ().string ();
+    if (name.compare (0, prefix.size (), prefix) != 0)
+      continue;
+    long pid = 0;
+    const char *begin = name.data () + prefix.size (), *end = name.data () + name.size ();
+    const auto parsed = std::from_chars (begin, end, pid);
+    if (parsed.ec != std::errc () || parsed.ptr == end || *parsed.ptr != '-' || pid <= 0 || pid == ::getpid () ||
+        ::kill (static_cast<pid_t> (pid), 0) == 0 || errno != ESRCH)
+      continue;
+    std::error_code ignored;
+    const bool moved_aside = name.size () > 4 && name.compare (name.size () - 4, 4, ".old") == 0;
+    if (moved_aside && !fs::exists (target, ignored))
+      fs::rename (entry.path (), target, ignored);
+    else
+      fs::remove_all (entry.path (), ignored);
+  }
 }
 
 template <typename T> T
@@ -316,7 +349,11 @@ DatasetWriter::DatasetWriter (const std::string &directory, const DatasetInfo &i
     throw DatasetError (directory + ": already exists; pass --force to replace it");
   const fs::path target = fs::absolute (directory);
   fs::create_directories (target.parent_path (), ec);
-  std::string tmpl = (target.parent_path () / ("." + target.filename ().string () + ".partial-XXXXXX")).string ();
+  const std::string prefix = "." + target.filename ().string () + ".partial-";
+  recoverInterruptedWriters (target, prefix);
+  // The writer's process id is in the name, so that a later writer can tell an
+  // abandoned staging directory (its process was killed) from a live one.
+  std::string tmpl = (target.parent_path () / (prefix + std::to_string (::getpid ()) + "-XXXXXX")).string ();
   if (!::mkdtemp (tmpl.data ()))
     throw DatasetError (directory + ": cannot create a staging directory beside it");
   staging_ = tmpl;

@@ -4,6 +4,7 @@
 #include <boost/program_options/variables_map.hpp>
 
 #include <algorithm>
+#include <filesystem>
 
 #include <iostream>
 
@@ -15,6 +16,25 @@ namespace agex
 {
 namespace apps
 {
+std::string
+bundledDataFile (const std::string &relative)
+{
+  std::error_code ec;
+  const std::filesystem::path exe = std::filesystem::read_symlink ("/proc/self/exe", ec);
+  if (!ec)
+  {
+    const auto installed = exe.parent_path ().parent_path () / AGEX_INSTALL_DATADIR / "agex" / relative;
+    if (std::filesystem::is_regular_file (installed, ec))
+      return installed.string ();
+  }
+  return std::string (AGEX_SOURCE_DATA_DIR) + "/" + relative;
+}
+
+const std::string kBundledModelFile = bundledDataFile ("models/agex_bonn.yml");
+const std::string kBundledFrameFile = bundledDataFile ("frames/bonn_1_002.png");
+const std::string kBundledSlidingWindowModelFile = bundledDataFile ("models/agex_bonn_sw.yml");
+const std::string kBundledLandmarkModelFile = bundledDataFile ("models/agex_contour_landmarks.dat");
+
 bool
 parseCommandLine (int argc, char **argv, const po::options_description &options,
                   const po::positional_options_description &positional)

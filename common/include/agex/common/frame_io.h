@@ -34,6 +34,11 @@ struct FrameOptions
   int height = 480;
 };
 
+/** The largest frame loadFrame reads, in pixels (16.7 M, e.g. 4096 x 4096; depth sensors
+  * give at most a few million). A file claiming more is refused before anything of its
+  * size is allocated, so that a damaged header cannot exhaust memory. */
+constexpr std::size_t kMaxFramePixels = std::size_t (1) << 24;
+
 /** An input problem: the message names the file and what is wrong with it. */
 class FrameError : public std::runtime_error
 {
@@ -63,7 +68,7 @@ depthImageToCloud (const cv::Mat &depth, const CameraIntrinsics &intrinsics,
 /** \brief Loads a frame by extension: .pcd (organized, any point type with x, y, z),
   * .png (8 or 16-bit single channel depth) or .u16 (raw little-endian uint16).
   * \throws FrameError naming the file and the problem (missing, truncated,
-  *         wrong size, unorganized, not a depth image, ...) */
+  *         wrong size, unorganized, not a depth image, larger than kMaxFramePixels, ...) */
 Frame loadFrame (const std::string &path, const FrameOptions &options = FrameOptions ());
 
 /** A crop of an organized frame followed by an isotropic resampling, e.g. the

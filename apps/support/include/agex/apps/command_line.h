@@ -16,6 +16,19 @@ namespace apps
 bool parseCommandLine (int argc, char **argv, const boost::program_options::options_description &options,
                        const boost::program_options::positional_options_description &positional);
 
+/** A file shipped with agex (relative to data/, e.g. "models/agex_bonn.yml"): the installed
+  * copy, <prefix>/share/agex/<relative>, when this executable runs from <prefix>/bin,
+  * else the one in the source tree it was built from. */
+std::string bundledDataFile (const std::string &relative);
+/** bundledDataFile ("models/agex_bonn.yml"), the apps' default model (AGEX_BUNDLED_MODEL). */
+extern const std::string kBundledModelFile;
+/** bundledDataFile ("frames/bonn_1_002.png"), agex_bench's default frame (AGEX_BUNDLED_FRAME). */
+extern const std::string kBundledFrameFile;
+/** bundledDataFile ("models/agex_bonn_sw.yml"), the sliding-window baseline's default model. */
+extern const std::string kBundledSlidingWindowModelFile;
+/** bundledDataFile ("models/agex_contour_landmarks.dat"), agex_landmarks' default model. */
+extern const std::string kBundledLandmarkModelFile;
+
 /** \brief Progress of long work on standard error: a line updated in place on a
   * terminal, a line per tenth of the work otherwise (logs stay short). */
 class Progress

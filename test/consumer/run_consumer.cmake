@@ -1,0 +1,98 @@
+# ctest agex_install_consumer: installs the build to a scratch prefix, then builds and
+# runs doc/examples/find_body_parts (the tutorial's program, a project of its own using
+# find_package(agex 0.1 REQUIRED)) against that prefix, as a PCL user would.
+#   cmake -DAGEX_BINARY_DIR=.. -DAGEX_SOURCE_DIR=.. -DWORK_DIR=.. -DCXX=.. [-DCXX_FLAGS=..] -P run_consumer.cmake
+foreach(var AGEX_BINARY_DIR AGEX_SOURCE_DIR WORK_DIR CXX)
+  if(NOT DEFINED ${var})
+    message(FATAL_ERROR "run_consumer.cmake needs -D${var}=...")
+  endif()
+endforeach()
+
+function(run)
+  execute_process(COMMAND ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  if(NOT rc EQUAL 0)
+    string(REPLACE ";" " " command "${ARGN}")
+    message(FATAL_ERROR "failed (${rc}): ${command}\n${out}\n${err}")
+  endif()
+  set(run_output "${out}${err}" PARENT_SCOPE)
+endfunction()
+
+# Every code block of the tutorial is in the program word for word (the blocks are the
+# program's lines, indented by 4 less).
+# ';' and '[' ']' are list syntax to CMake: both texts get them replaced first.
+function(read_for_lists path var)
+  file(READ ${path} text)
+  string(REPLACE ";" "<semicolon>" text "${text}")
+  string(REPLACE "[" "<open>" text "${text}")
+  string(REPLACE "]" "<close>" text "${text}")
+  set(${var} "${text}" PARENT_SCOPE)
+endfunction()
+read_for_lists(${AGEX_SOURCE_DIR}/doc/tutorial.md tutorial)
+read_for_lists(${AGEX_SOURCE_DIR}/doc/examples/find_body_parts/find_body_parts.cpp program)
+string(REPLACE "\n    " "\n" program "${program}")
+string(REGEX MATCHALL "```cpp\n[^`]*```" blocks "${tutorial}")
+list(LENGTH blocks block_count)
+if(block_count LESS 10)
+  message(FATAL_ERROR "doc/tutorial.md: expected the 10 code blocks of the program, found ${block_count}")
+endif()
+foreach(block IN LISTS blocks)
+  string(REGEX REPLACE "^```cpp\n" "" code "${block}")
+  string(REGEX REPLACE "```$" "" code "${code}")
+  string(FIND "${program}" "${code}" at)
+  if(at EQUAL -1)
+    message(FATAL_ERROR "doc/tutorial.md has code that is not in find_body_parts.cpp:\n${code}")
+  endif()
+endforeach()
+
+set(prefix ${WORK_DIR}/prefix)
+file(REMOVE_RECURSE ${WORK_DIR})
+run(${CMAKE_COMMAND} --install ${AGEX_BINARY_DIR} --prefix ${prefix})
+
+# What a user relies on is there.
+file(GLOB config ${prefix}/lib*/cmake/agex/agexConfig.cmake ${prefix}/lib/*/cmake/agex/agexConfig.cmake)
+if(NOT config)
+  message(FATAL_ERROR "no agexConfig.cmake installed under ${prefix}")
+endif()
+get_filename_component(config_dir "${config}" DIRECTORY)
+foreach(file include/agex/keypoints/agex_keypoint.h include/agex/keypoints/impl/agex_keypoint.hpp
+             include/agex/common/frame_io.h bin/agex_detect share/agex/models/agex_bonn.yml)
+  if(NOT EXISTS ${prefix}/${file})
+    message(FATAL_ERROR "${file} was not installed")
+  endif()
+endforeach()
+
+# Version file: 0.1 asks are met, 0.2 and 1.0 asks are not.
+foreach(asked_compatible 0.1:TRUE 0.1.0:TRUE 0.2:FALSE 1.0:FALSE)
+  string(REPLACE ":" ";" pair ${asked_compatible})
+  list(GET pair 0 PACKAGE_FIND_VERSION)
+  list(GET pair 1 expected)
+  string(REPLACE "." ";" parts ${PACKAGE_FIND_VERSION})
+  list(GET parts 0 PACKAGE_FIND_VERSION_MAJOR)
+  list(GET parts 1 PACKAGE_FIND_VERSION_MINOR)
+  set(PACKAGE_VERSION_COMPATIBLE FALSE)
+  include(${config_dir}/agexConfigVersion.cmake)
+  if(NOT "${PACKAGE_VERSION_COMPATIBLE}" STREQUAL "${expected}")
+    message(FATAL_ERROR "asking for agex ${PACKAGE_FIND_VERSION} gave compatible=${PACKAGE_VERSION_COMPATIBLE}")
+  endif()
+endforeach()
+
+# A project of its own, against the installed copy only.
+run(${CMAKE_COMMAND} -S ${AGEX_SOURCE_DIR}/doc/examples/find_body_parts -B ${WORK_DIR}/build
+    -DCMAKE_BUILD_TYPE=Release -DCMAKE_PREFIX_PATH=${prefix} -DCMAKE_CXX_COMPILER=${CXX}
+    "-DCMAKE_CXX_FLAGS=${CXX_FLAGS}")
+run(${CMAKE_COMMAND} --build ${WORK_DIR}/build)
+run(${WORK_DIR}/build/find_body_parts ${prefix}/share/agex/frames/bonn_1_002.png
+    ${prefix}/share/agex/models/agex_bonn.yml)
+message("${run_output}")
+foreach(expected "frame: 640 x 480 points" "AGEX points: [1-9]" ": head ")
+  if(NOT run_output MATCHES "${expected}")
+    message(FATAL_ERROR "find_body_parts output does not match '${expected}'")
+  endif()
+endforeach()
+
+# The installed app finds the installed libraries (RPATH) and the installed model.
+run(${prefix}/bin/agex_detect --help)
+if(NOT run_output MATCHES "share/agex/models/agex_bonn.yml")
+  message(FATAL_ERROR "the installed agex_detect does not default to the installed model:\n${run_output}")
+endif()
+file(REMOVE_RECURSE ${WORK_DIR})

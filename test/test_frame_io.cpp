@@ -323,6 +323,22 @@ TEST (FrameIo, HugeClaimedSizesAndDamagedFieldsAreRefusedBeforeReading)
   const std::string short_ascii = dir.file ("short.pcd");
   writeAll (short_ascii, header + "WIDTH 1000\nHEIGHT 1000\nPOINTS 1000000\nDATA ascii\n0 0 1\n");
   expectFrameError ([&] { agex::loadFrame (short_ascii); }, {short_ascii, "does not match its header"});
+  // Keywords twice, misspelt by a prefix, or with numbers that are not whole (PCL's header
+  // parser accepts all three and then corrupts its heap on some); a well-formed header of the
+  // same frame loads.
+  const std::string body = "WIDTH 2\nHEIGHT 2\nPOINTS 4\nDATA ascii\n0 0 1\n0 0 1\n0 0 1\n0 0 1\n";
+  const std::string well_formed = dir.file ("well_formed.pcd");
+  writeAll (well_formed, header + body);
+  EXPECT_EQ (agex::loadFrame (well_formed).cloud->size (), 4u);
+  const std::string twice = dir.file ("twice.pcd");
+  writeAll (twice, header + "FIELDS x y z\n" + body);
+  expectFrameError ([&] { agex::loadFrame (twice); }, {twice, "more than one FIELDS"});
+  const std::string prefixed = dir.file ("prefixed.pcd");
+  writeAll (prefixed, "VERSION 0.7\nFIELDS x y z\nSIZEX 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n" + body);
+  expectFrameError ([&] { agex::loadFrame (prefixed); }, {prefixed, "damaged"});
+  const std::string not_whole = dir.file ("not_whole.pcd");
+  writeAll (not_whole, "VERSION 0.7\nFIELDS x y z\nSIZE 4? 4 4\nTYPE F F F\nCOUNT 1 1 1\n" + body);
+  expectFrameError ([&] { agex::loadFrame (not_whole); }, {not_whole, "not a whole number"});
   // Fields that do not fit the point (a repeated SIZE line), and no WIDTH line.
   const std::string bad_fields = dir.file ("fields.pcd");
   writeAll (bad_fields, header + "SIZE 4 4 0\nWIDTH 2\nHEIGHT 2\nPOINTS 4\nDATA ascii\n0 0 1\n0 0 1\n0 0 1\n0 0 1\n");

@@ -9,9 +9,11 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <cstring>
 #include <fstream>
 #include <iterator>
 #include <limits>
+#include <set>
 #include <sstream>
 #include <vector>
 
@@ -94,11 +96,34 @@ checkPcdHeaderSizes (const std::string &path)
   std::vector<std::uint64_t> sizes, counts;
   std::vector<std::string> types;
   std::string line, data;
+  // PCL's header parser matches keywords by prefix and, given one twice, keeps pointers into
+  // what the second one replaced (heap corruption while reading the body; found by fuzzing):
+  // each keyword may appear once, and its numbers must be whole numbers.
+  static const char *const kKeywords[] = {"VERSION", "FIELDS", "COLUMNS", "SIZE", "TYPE", "COUNT",
+                                          "WIDTH",   "HEIGHT", "VIEWPOINT", "POINTS", "DATA"};
+  std::set<std::string> seen;
   for (int lines = 0; lines < 64 && std::getline (in, line); ++lines)
   {
     std::istringstream words (line);
     std::string key;
     words >> key;
+    const std::streampos after_key = words.tellg ();
+    for (const char *keyword : kKeywords)
+      if (key.compare (0, std::strlen (keyword), keyword) == 0)
+      {
+        const std::string name = std::strcmp (keyword, "COLUMNS") == 0 ? "FIELDS" : keyword;
+        if (!seen.insert (name).second)
+          fail (path, "PCD header has more than one " + name + " line (damaged header)");
+        if (key != keyword)
+          fail (path, "PCD header line '" + line.substr (0, 40) + "' is damaged");
+        if (name == "SIZE" || name == "COUNT" || name == "WIDTH" || name == "HEIGHT" || name == "POINTS")
+          for (std::string token; words >> token;)
+            if (token.find_first_not_of ("0123456789") != std::string::npos)
+              fail (path, "PCD " + name + " line holds '" + token.substr (0, 20) + "', not a whole number");
+        words.clear ();
+        words.seekg (after_key);
+        break;
+      }
     std::uint64_t *value = key == "WIDTH" ? &width : key == "HEIGHT" ? &height : key == "POINTS" ? &points : nullptr;
     if (value && !(words >> *value))
       *value = 0;  // PCL reports malformed numbers itself

@@ -102,6 +102,7 @@ checkPcdHeaderSizes (const std::string &path)
   static const char *const kKeywords[] = {"VERSION", "FIELDS", "COLUMNS", "SIZE", "TYPE", "COUNT",
                                           "WIDTH",   "HEIGHT", "VIEWPOINT", "POINTS", "DATA"};
   std::set<std::string> seen;
+  std::size_t fields = 0;
   for (int lines = 0; lines < 64 && std::getline (in, line); ++lines)
   {
     std::istringstream words (line);
@@ -132,6 +133,9 @@ checkPcdHeaderSizes (const std::string &path)
       list->clear ();  // a repeated line replaces the earlier one, as in PCL
     for (std::uint64_t v = 0; list && words >> v;)
       list->push_back (v);
+    if (key == "FIELDS" || key == "COLUMNS")
+      fields = static_cast<std::size_t> (std::distance (std::istream_iterator<std::string> (words),
+                                                        std::istream_iterator<std::string> ()));
     if (key == "TYPE")
       types.assign (std::istream_iterator<std::string> (words), std::istream_iterator<std::string> ());
     if (key == "DATA")
@@ -140,6 +144,13 @@ checkPcdHeaderSizes (const std::string &path)
       break;
     }
   }
+  // Every field needs its SIZE and TYPE (and COUNT, when given): PCL lays out the point from
+  // them and writes values of the field's type into it regardless.
+  if (fields == 0 || sizes.size () != fields || types.size () != fields ||
+      (seen.count ("COUNT") && counts.size () != fields))
+    fail (path, "PCD header has " + std::to_string (fields) + " fields but " + std::to_string (sizes.size ()) +
+                    " sizes, " + std::to_string (types.size ()) + " types and " + std::to_string (counts.size ()) +
+                    " counts (damaged FIELDS, SIZE, TYPE or COUNT line)");
   checkFrameSize (path, width, height);
   if (points > kMaxFramePixels)
     fail (path, "claims " + std::to_string (points) + " points, more than the " + std::to_string (kMaxFramePixels) +

@@ -4,7 +4,8 @@
 #   build/       the Release build, every test;
 #   build-asan/  every test again with AddressSanitizer (leaks included) and
 #                UndefinedBehaviorSanitizer (AGEX_SANITIZE=ON; skip with AGEX_SKIP_SANITIZE=1);
-#   build-fuzz/  each fuzz target for AGEX_FUZZ_SECONDS (default 10) seconds, when clang
+#   build-fuzz/  each fuzz target on AGEX_FUZZ_RUNS (default 20000) inputs from a fixed seed,
+#                at most AGEX_FUZZ_SECONDS (60) seconds, when clang
 #                is installed (AGEX_BUILD_FUZZERS=ON; skip with AGEX_SKIP_FUZZ=1).
 # Exits non-zero on any failure. Tests that need the data in ../shared skip, saying
 # what is missing, when it is absent.
@@ -23,10 +24,11 @@ fi
 
 if [ "${AGEX_SKIP_FUZZ:-0}" != 1 ]; then
   if command -v clang++ >/dev/null && command -v clang >/dev/null; then
-    echo "agex: fuzzing each reader for ${AGEX_FUZZ_SECONDS:-10} s"
+    echo "agex: fuzzing each reader: ${AGEX_FUZZ_RUNS:-20000} seeded inputs (at most ${AGEX_FUZZ_SECONDS:-60} s)"
     cmake -S "$AGEX_ROOT" -B "$AGEX_ROOT/build-fuzz" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
       -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ -DAGEX_BUILD_FUZZERS=ON \
-      -DAGEX_BUILD_APPS=OFF -DAGEX_FUZZ_SECONDS="${AGEX_FUZZ_SECONDS:-10}" >/dev/null
+      -DAGEX_BUILD_APPS=OFF -DAGEX_FUZZ_SECONDS="${AGEX_FUZZ_SECONDS:-60}" \
+      -DAGEX_FUZZ_RUNS="${AGEX_FUZZ_RUNS:-20000}" >/dev/null
     cmake --build "$AGEX_ROOT/build-fuzz" --target agex_fuzzers -j "$AGEX_JOBS"
     ctest --test-dir "$AGEX_ROOT/build-fuzz" -L '^fuzz$' --output-on-failure -j "$AGEX_JOBS"
   else

@@ -12,6 +12,7 @@
 #include <opencv2/videoio.hpp>
 
 #include <algorithm>
+#include <csignal>
 #include <chrono>
 #include <iostream>
 
@@ -55,6 +56,14 @@ frameJson (const std::string &source, const FrameResult &result)
     people.push_back (agex::apps::landmarkedPersonJson (person));
   return {{"source", source}, {"people", people}, {"ms", {{"detect", result.detect_ms}, {"landmarks", result.landmarks_ms}}}};
 }
+/** Set by Ctrl-C: a camera runs until then, and what was seen is still written. */
+volatile std::sig_atomic_t interrupted = 0;
+
+void
+stopReading (int)
+{
+  interrupted = 1;
+}
 }  // namespace
 
 int
@@ -72,7 +81,8 @@ main (int argc, char **argv)
     ("threshold", po::value (&threshold)->default_value (threshold), "detection threshold (higher: fewer, surer people)")
     ("json", po::value (&json_path), "write boxes and landmarks as JSON here")
     ("overlay", po::value (&overlay_path), "write an overlay PNG here (the last image or frame)")
-    ("video", po::value (&video), "a video file, or a camera number, processed frame by frame")
+    ("video", po::value (&video), "a video file, or a camera number, processed frame by frame until its end, "
+     "--max-frames or Ctrl-C (the outputs are written then)")
     ("max-frames", po::value (&max_frames)->default_value (0), "stop a video after this many frames (0: all)")
     ("repeat", po::value (&repeat)->default_value (repeat),
      "process each image N times and report the fastest run of each stage (timing on a busy machine)");
@@ -125,8 +135,9 @@ main (int argc, char **argv)
       const bool camera = !video.empty () && std::all_of (video.begin (), video.end (), ::isdigit);
       if (camera ? !capture.open (std::stoi (video)) : !capture.open (video))
         throw std::runtime_error (video + ": cannot open the video or camera");
+      std::signal (SIGINT, stopReading);
       cv::Mat frame;
-      for (int n = 0; (max_frames == 0 || n < max_frames) && capture.read (frame) && !frame.empty (); ++n)
+      for (int n = 0; !interrupted && (max_frames == 0 || n < max_frames) && capture.read (frame) && !frame.empty (); ++n)
         report (video + "#" + std::to_string (n), frame.clone (), processFrame (frame, detector, predictor, threshold));
     }
     nlohmann::json doc = {{"model", model_path}, {"detector", detector.description ()}, {"frames", frames}};

@@ -13,6 +13,7 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <opencv2/videoio.hpp>
 
 #include <random>
 
@@ -520,6 +521,68 @@ TEST (LandmarkApps, BundledModelOnBundledImage)
   EXPECT_FALSE (cv::imread (overlay).empty ());
   EXPECT_NE (run (std::string (AGEX_LANDMARKS_EXECUTABLE) + " " + (dir / "missing.png").string ()), 0);
   EXPECT_NE (run (std::string (AGEX_LANDMARKS_EXECUTABLE) + " " + image + " --model " + image), 0);
+  fs::remove_all (dir);
+}
+TEST (LandmarkApps, VideoFileFrameByFrame)
+{
+  // A short MJPEG AVI written with OpenCV's own encoder (no FFmpeg needed): each of its
+  // frames must give the people that the same decoded frame gives as a still image.
+  const fs::path dir = tempDir ("video");
+  const std::string video = (dir / "walk.avi").string ();
+  const cv::Mat still = cv::imread (std::string (AGEX_SOURCE_DIR) + "/data/images/five_people.jpg");
+  ASSERT_FALSE (still.empty ());
+  {
+    cv::VideoWriter writer (video, cv::CAP_OPENCV_MJPEG, cv::VideoWriter::fourcc ('M', 'J', 'P', 'G'), 10.0,
+                            still.size ());
+    ASSERT_TRUE (writer.isOpened ());
+    cv::Mat shifted;
+    for (int n = 0; n < 3; ++n)
+    {
+      // The people move 20 pixels to the right per frame.
+      const cv::Mat shift = (cv::Mat_<double> (2, 3) << 1, 0, 20 * n, 0, 1, 0);
+      cv::warpAffine (still, shifted, shift, still.size ());
+      writer.write (shifted);
+    }
+  }
+  std::vector<std::string> decoded;
+  {
+    cv::VideoCapture capture (video);  // the backend the app opens it with
+    cv::Mat frame;
+    while (capture.read (frame) && !frame.empty ())
+    {
+      decoded.push_back ((dir / ("frame" + std::to_string (decoded.size ()) + ".png")).string ());
+      ASSERT_TRUE (cv::imwrite (decoded.back (), frame));
+    }
+  }
+  ASSERT_EQ (decoded.size (), 3u);
+
+  const std::string from_video = (dir / "video.json").string (), from_stills = (dir / "stills.json").string ();
+  ASSERT_EQ (run (std::string (AGEX_LANDMARKS_EXECUTABLE) + " --video " + video + " --json " + from_video), 0);
+  std::string stills_command = std::string (AGEX_LANDMARKS_EXECUTABLE);
+  for (const auto &frame : decoded)
+    stills_command += " " + frame;
+  ASSERT_EQ (run (stills_command + " --json " + from_stills), 0);
+  const nlohmann::json v = nlohmann::json::parse (readAll (from_video));
+  const nlohmann::json s = nlohmann::json::parse (readAll (from_stills));
+  ASSERT_EQ (v["frames"].size (), 3u);
+  std::size_t people = 0;
+  for (std::size_t n = 0; n < 3; ++n)
+  {
+    EXPECT_EQ (v["frames"][n]["source"], video + "#" + std::to_string (n));
+    ASSERT_EQ (v["frames"][n]["people"].size (), s["frames"][n]["people"].size ()) << "frame " << n;
+    for (std::size_t i = 0; i < v["frames"][n]["people"].size (); ++i)
+    {
+      EXPECT_EQ (v["frames"][n]["people"][i]["box"], s["frames"][n]["people"][i]["box"]);
+      EXPECT_EQ (v["frames"][n]["people"][i]["landmarks"].size (), 180u);
+    }
+    people += v["frames"][n]["people"].size ();
+  }
+  EXPECT_GT (people, 0u);
+
+  // --max-frames stops early; a file that is no video is refused.
+  ASSERT_EQ (run (std::string (AGEX_LANDMARKS_EXECUTABLE) + " --video " + video + " --max-frames 2 --json " + from_video), 0);
+  EXPECT_EQ (nlohmann::json::parse (readAll (from_video))["frames"].size (), 2u);
+  EXPECT_NE (run (std::string (AGEX_LANDMARKS_EXECUTABLE) + " --video " + decoded[0] + "x --json " + from_video), 0);
   fs::remove_all (dir);
 }
 #endif

@@ -387,6 +387,38 @@ TEST (PeopleDetector, BoxIoU)
   EXPECT_TRUE (agex::PeopleDetector::openCvDefault ().detect (cv::Mat ()).empty ());
 }
 
+// The OpenCV fallback on a half-size image: the people it finds at full size (tall enough
+// for the halved image) are found again, with boxes in the full image's pixels.
+TEST (PeopleDetector, OpenCvFallbackOnResizedImage)
+{
+  const cv::Mat image = cv::imread (std::string (AGEX_SOURCE_DIR) + "/data/images/five_people.jpg");
+  ASSERT_FALSE (image.empty ());
+  const auto full = agex::PeopleDetector::openCvDefault (1.0).detect (image);
+  const auto half = agex::PeopleDetector::openCvDefault (0.5).detect (image);
+  ASSERT_FALSE (full.empty ());
+  ASSERT_FALSE (half.empty ());
+  const cv::Rect frame (0, 0, image.cols, image.rows);
+  for (const auto &person : half)
+    EXPECT_GT ((person.box & frame).area (), 0.8 * person.box.area ()) << person.box;
+  int matched = 0;
+  for (const auto &a : full)
+  {
+    if (a.box.height < 200)  // about 96 / 0.5 pixels: too small for the half-size image
+      continue;
+    for (const auto &b : half)
+      if (agex::boxIoU (a.box, b.box) > 0.5)
+      {
+        ++matched;
+        break;
+      }
+  }
+  EXPECT_GE (matched, 1);
+  // A tiny image is no error, just no people.
+  EXPECT_TRUE (agex::PeopleDetector::openCvDefault (0.1).detect (cv::Mat (100, 60, CV_8UC3, cv::Scalar::all (80))).empty ());
+  EXPECT_THROW (agex::PeopleDetector::openCvDefault (0.0), std::invalid_argument);
+  EXPECT_THROW (agex::PeopleDetector::openCvDefault (5.0), std::invalid_argument);
+}
+
 // Bright figures on noise: the fhog detector trained on a few finds a new one, and a saved
 // detector gives the same boxes.
 TEST (PeopleDetector, TrainsOnSyntheticFiguresAndRoundTrips)

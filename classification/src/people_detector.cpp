@@ -100,11 +100,14 @@ PeopleDetector::train (const std::vector<cv::Mat> &grey_images, const std::vecto
 }
 
 PeopleDetector
-PeopleDetector::openCvDefault ()
+PeopleDetector::openCvDefault (double scale)
 {
+  if (!(scale > 0.05 && scale <= 4.0))
+    throw std::invalid_argument ("OpenCV people detector: scale must lie in (0.05, 4]");
   PeopleDetector detector;
   detector.impl_ = std::make_unique<Impl> ();
   detector.impl_->opencv_default = true;
+  detector.impl_->scale = scale;
   detector.impl_->hog.setSVMDetector (cv::HOGDescriptor::getDefaultPeopleDetector ());
   return detector;
 }
@@ -166,7 +169,8 @@ PeopleDetector::description () const
   if (!impl_)
     return "none";
   if (impl_->opencv_default)
-    return "OpenCV HOG people detector (Dalal-Triggs, 64x128)";
+    return "OpenCV HOG people detector (Dalal-Triggs, 64x128)" +
+           (impl_->scale != 1.0 ? ", scale " + std::to_string (impl_->scale) : std::string ());
   const Scanner &scanner = impl_->fhog.get_scanner ();
   return "fhog detector, window " + std::to_string (scanner.get_detection_window_width ()) + "x" +
          std::to_string (scanner.get_detection_window_height ()) + ", upsample " + std::to_string (impl_->upsample) +
@@ -182,26 +186,29 @@ PeopleDetector::detect (const cv::Mat &image, double threshold) const
   if (image.empty ())
     return people;
   const cv::Mat grey = toGrey (image);
+  cv::Mat resized = grey;
+  if (impl_->scale != 1.0)
+    cv::resize (grey, resized, cv::Size (), impl_->scale, impl_->scale, cv::INTER_AREA);
   if (impl_->opencv_default)
   {
     std::vector<cv::Rect> found;
     std::vector<double> weights;
-    impl_->hog.detectMultiScale (grey, found, weights, threshold, cv::Size (8, 8), cv::Size (0, 0), 1.05, 2.0);
+    if (resized.cols >= impl_->hog.winSize.width && resized.rows >= impl_->hog.winSize.height)
+      impl_->hog.detectMultiScale (resized, found, weights, threshold, cv::Size (8, 8), cv::Size (0, 0), 1.05, 2.0);
     for (std::size_t i = 0; i < found.size (); ++i)
     {
       // The 64x128 window holds a person about 96 pixels tall in its middle: report the
       // square box of the person as agex_annotate would.
       const cv::Rect &r = found[i];
-      const int side = static_cast<int> (std::lround (0.75 * r.height));
-      people.push_back ({cv::Rect (r.x + r.width / 2 - side / 2, r.y + r.height / 2 - side / 2, side, side),
+      const double side = 0.75 * r.height / impl_->scale;
+      const double cx = (r.x + 0.5 * r.width) / impl_->scale, cy = (r.y + 0.5 * r.height) / impl_->scale;
+      people.push_back ({cv::Rect (static_cast<int> (std::lround (cx - side / 2)), static_cast<int> (std::lround (cy - side / 2)),
+                                   static_cast<int> (std::lround (side)), static_cast<int> (std::lround (side))),
                          i < weights.size () ? weights[i] : 0.0});
     }
     return people;
   }
   std::vector<dlib::rect_detection> detections;
-  cv::Mat resized = grey;
-  if (impl_->scale != 1.0)
-    cv::resize (grey, resized, cv::Size (), impl_->scale, impl_->scale, cv::INTER_AREA);
   if (impl_->upsample == 0)
     impl_->fhog (dlib::cv_image<unsigned char> (resized), detections, threshold);
   else

@@ -120,6 +120,75 @@ TEST (DepthMedianFilter, SameCloudAsPclMedianFilter)
   EXPECT_GT (clamped, 50);
 }
 
+/** A width x height cloud with the given depths (NaN: an invalid pixel) on x = y = 0. */
+Cloud::Ptr
+depthCloud (int width, int height, const std::vector<float> &depths)
+{
+  Cloud::Ptr cloud = nanCloud (width, height);
+  for (std::size_t i = 0; i < depths.size (); ++i)
+    if (!std::isnan (depths[i]))
+      (*cloud)[i] = pcl::PointXYZ (0.f, 0.f, depths[i]);
+  return cloud;
+}
+
+TEST (DepthMedianFilter, EveryThreeByThreeWindowOfTwoDepthsAndHoles)
+{
+  // Every 3x3 window over {NaN, 1, 2} with a valid centre: every count of valid
+  // neighbours and, by the 0-1 principle of comparison networks, every ordering.
+  const float values[3] = {nanf_ (), 1.f, 2.f};
+  int patterns = 0, moved = 0;
+  std::vector<float> depths (9);
+  for (int code = 0; code < 6561 * 2; ++code)
+  {
+    int rest = code;
+    for (int i = 0; i < 9; ++i)
+    {
+      if (i == 4)
+      {
+        depths[i] = values[1 + rest % 2];
+        rest /= 2;
+      }
+      else
+      {
+        depths[i] = values[rest % 3];
+        rest /= 3;
+      }
+    }
+    const Cloud::Ptr input = depthCloud (3, 3, depths);
+    const Cloud expected = pclMedian (input, 3, 5.f);
+    const Cloud actual = agexMedian (input, 3, 5.f, false);
+    ASSERT_EQ (actual.size (), 9u);
+    ASSERT_EQ (bits (actual[4].z), bits (expected[4].z)) << "pattern " << code;
+    moved += expected[4].z != depths[4];
+    ++patterns;
+  }
+  EXPECT_EQ (patterns, 13122);
+  EXPECT_GT (moved, 1000);
+}
+
+TEST (DepthMedianFilter, SignedZerosComeBackAsPclReturnsThem)
+{
+  // +0 and -0 compare equal: the filter must pick the very zero PCL's nth_element picks.
+  std::mt19937 rng (8);
+  const float values[4] = {nanf_ (), 0.f, -0.f, 1.f};
+  int negative = 0;
+  for (int trial = 0; trial < 300; ++trial)
+  {
+    std::vector<float> depths (25);
+    for (auto &z : depths)
+      z = values[rng () % 4];
+    const Cloud::Ptr input = depthCloud (5, 5, depths);
+    for (int window : {3, 5})
+    {
+      const Cloud expected = pclMedian (input, window, 5.f);
+      expectBitwiseEqual (expected, agexMedian (input, window, 5.f, false), "trial " + std::to_string (trial));
+      for (const auto &p : expected)
+        negative += std::signbit (p.z) && p.z == 0.f;
+    }
+  }
+  EXPECT_GT (negative, 100);
+}
+
 TEST (DepthMedianFilter, KeepOnViewingRayScalesXAndYWithZ)
 {
   const Cloud::Ptr input = randomFrame (23, 17, 4);

@@ -13,9 +13,10 @@ namespace agex
   * Why not pcl::MedianFilter: PCL 1.13 builds a std::vector for every pixel (an
   * allocation and a free per point), which made the 3x3 median the second most
   * expensive stage of the depth pipeline (0.78 ms of 5.27 ms per 144x176 Bonn frame).
-  * This class gathers the window into a fixed scratch buffer instead (a stack array for
-  * windows up to 3x3), reads depth from one contiguous array and checks the image
-  * borders once per pixel; see doc/benchmarks.md for the measured difference.
+  * This class reads depth from one contiguous array and gathers each window into a
+  * fixed scratch buffer; a 3x3 window away from the border, the pipeline's case, goes
+  * through a branch-free median-of-9 network instead of std::nth_element. See
+  * doc/benchmarks.md for the measured difference.
   *
   * Semantics are pcl::MedianFilter's, so that with setKeepOnViewingRay (false) the
   * output is the same cloud bit for bit (test/test_depth_median_filter.cpp checks it):

@@ -8,6 +8,81 @@
 #include <cmath>
 #include <limits>
 
+namespace agex
+{
+namespace detail
+{
+/** The median as pcl::MedianFilter takes it: the valid depths of the window around
+  * (u, v) in row-major order (NaN marks invalid ones), element count / 2 after
+  * std::nth_element. window has room for the whole window; (u, v) itself is valid. */
+inline float
+windowMedian (const float *depth, int width, int height, int u, int v, int radius, float *window)
+{
+  const int u_first = std::max (u - radius, 0), u_last = std::min (u + radius, width - 1);
+  const int v_first = std::max (v - radius, 0), v_last = std::min (v + radius, height - 1);
+  int count = 0;
+  for (int y = v_first; y <= v_last; ++y)
+  {
+    const float *row = depth + static_cast<std::size_t> (y) * width;
+    for (int x = u_first; x <= u_last; ++x)
+    {
+      window[count] = row[x];
+      count += std::isnan (row[x]) ? 0 : 1;  // overwritten by the next one if invalid
+    }
+  }
+  float *middle = window + count / 2;
+  std::nth_element (window, middle, window + count);
+  return *middle;
+}
+
+/** The same median for a 3x3 window inside the image, centred at depth[0] (stride
+  * width), without branches: a 19-exchange median-of-9 network (Paeth) over the window
+  * with its n invalid depths replaced by 4 - n / 2 times -inf and the rest +inf, which
+  * leaves element n / 2 of the valid depths in the middle. Any selection yields the same
+  * value; only +0 and -0 compare equal with different bits, so a window holding a zero
+  * returns false and is left to windowMedian, which picks the zero PCL picks. */
+inline bool
+median3x3 (const float *depth, int width, float &median)
+{
+  float p[9];
+  const float *rows[3] = {depth - width - 1, depth - 1, depth + width - 1};
+  int valid = 0;
+  bool zero = false;
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c)
+    {
+      const float z = rows[r][c];
+      p[3 * r + c] = z;
+      valid += std::isnan (z) ? 0 : 1;
+      zero |= z == 0.f;
+    }
+  if (zero)
+    return false;
+  if (valid < 9)
+  {
+    int low = 4 - valid / 2;
+    for (float &z : p)
+      if (std::isnan (z))
+        z = low-- > 0 ? -std::numeric_limits<float>::infinity () : std::numeric_limits<float>::infinity ();
+  }
+  const auto sort2 = [&p] (int a, int b) {
+    const float lo = std::min (p[a], p[b]), hi = std::max (p[a], p[b]);
+    p[a] = lo;
+    p[b] = hi;
+  };
+  sort2 (1, 2); sort2 (4, 5); sort2 (7, 8);
+  sort2 (0, 1); sort2 (3, 4); sort2 (6, 7);
+  sort2 (1, 2); sort2 (4, 5); sort2 (7, 8);
+  sort2 (0, 3); sort2 (5, 8); sort2 (4, 7);
+  sort2 (3, 6); sort2 (1, 4); sort2 (2, 5);
+  sort2 (4, 7); sort2 (4, 2); sort2 (6, 4);
+  sort2 (4, 2);
+  median = p[4];
+  return true;
+}
+}  // namespace detail
+}  // namespace agex
+
 template <typename PointT> void
 agex::DepthMedianFilter<PointT>::filterPoints (PointCloud &output, float *window) const
 {
@@ -20,23 +95,10 @@ agex::DepthMedianFilter<PointT>::filterPoints (PointCloud &output, float *window
     if (std::isnan (z0))
       continue;  // not a finite point: stays as it is
     const int u = index % width, v = index / width;
-    const int u_first = std::max (u - radius, 0), u_last = std::min (u + radius, width - 1);
-    const int v_first = std::max (v - radius, 0), v_last = std::min (v + radius, height - 1);
-    // Row-major, skipping invalid neighbours without a branch: the order PCL gathers
-    // them in, so that nth_element picks the very same element.
-    int count = 0;
-    for (int y = v_first; y <= v_last; ++y)
-    {
-      const float *row = depth + static_cast<std::size_t> (y) * width;
-      for (int x = u_first; x <= u_last; ++x)
-      {
-        window[count] = row[x];
-        count += std::isnan (row[x]) ? 0 : 1;
-      }
-    }
-    float *middle = window + count / 2;  // count >= 1: the point itself is in the window
-    std::nth_element (window, middle, window + count);
-    const float median = *middle;
+    float median;
+    const bool inside = u > 0 && v > 0 && u < width - 1 && v < height - 1;
+    if (!(radius == 1 && inside && detail::median3x3 (depth + index, width, median)))
+      median = detail::windowMedian (depth, width, height, u, v, radius, window);
 
     // pcl::MedianFilter's clamp, in its arithmetic (bit-identical results).
     const float step = median - z0;

@@ -1,10 +1,14 @@
-// agex::SpurFilter keeps each point's connected neighbours from the first pass and only
-// revisits the neighbours of removed points: the same points as the plain erosion (every
-// pass testing every remaining point against its 8 neighbours), written out here.
+// Shortcuts the filters take, against the plain computation they stand for:
+// - agex::SpurFilter keeps each point's connected neighbours from the first pass and only
+//   revisits the neighbours of removed points: the same points as the plain erosion (every
+//   pass testing every remaining point against its 8 neighbours), written out here;
+// - agex::MixedPixelFilter precomputes ranges (NaN for invalid points) and lets them skip
+//   invalid neighbours: the same points as isMixedPixel, which computes everything per test.
 
 #include "test_support.h"
 
 #include <agex/common/organized_neighbourhood.h>
+#include <agex/filters/mixed_pixel_filter.h>
 #include <agex/filters/spur_filter.h>
 
 #include <random>
@@ -105,5 +109,40 @@ TEST (SpurFilter, SamePointsAsThePlainErosion)
   }
   EXPECT_EQ (compared, 8 * 2 * 5 * 4 * 2);
   EXPECT_GT (removed, 5000);  // the erosions did remove points, over several passes
+}
+TEST (MixedPixelFilter, SamePointsAsTheTestOfEachPoint)
+{
+  int mixed = 0;
+  for (unsigned seed = 1; seed <= 6; ++seed)
+  {
+    const Cloud::Ptr cloud = blobFrame (40, 30, seed);
+    // Veils between blobs and the odd point with an infinite or NaN coordinate.
+    std::mt19937 rng (seed);
+    for (int i = 0; i < static_cast<int> (cloud->size ()); ++i)
+    {
+      pcl::PointXYZ &p = (*cloud)[i];
+      const unsigned r = rng () % 100;
+      if (r < 2)
+        p.x = r == 0 ? std::numeric_limits<float>::infinity () : nanf_ ();
+      else if (r < 30 && !isFinite (p))
+        p = pcl::PointXYZ (0.01f * (i % 40), 0.01f * (i / 40), 1.5f + 2.f * static_cast<float> (rng () % 1000) / 1000.f);
+    }
+    for (float margin : {0.f, 0.1f})
+    {
+      agex::MixedPixelFilter<pcl::PointXYZ> filter;
+      filter.setInputCloud (cloud);
+      filter.setInteriorMargin (margin);
+      filter.setNegative (true);
+      pcl::Indices found;
+      filter.filter (found);
+      std::vector<int> expected;
+      for (int i = 0; i < static_cast<int> (cloud->size ()); ++i)
+        if (isFinite ((*cloud)[i]) && filter.isMixedPixel (i))
+          expected.push_back (i);
+      ASSERT_EQ (std::vector<int> (found.begin (), found.end ()), expected) << "seed " << seed;
+      mixed += static_cast<int> (expected.size ());
+    }
+  }
+  EXPECT_GT (mixed, 100);
 }
 }  // namespace

@@ -1,5 +1,6 @@
 #include <agex/apps/depth_pipeline.h>
 
+#include <agex/filters/depth_median_filter.h>
 #include <agex/filters/mixed_pixel_filter.h>
 #include <agex/filters/spur_filter.h>
 #include <agex/filters/surface_segmentation.h>
@@ -8,7 +9,6 @@
 #include <pcl/ModelCoefficients.h>
 #include <pcl/console/print.h>
 #include <pcl/filters/crop_box.h>
-#include <pcl/filters/median_filter.h>
 #include <pcl/sample_consensus/method_types.h>
 #include <pcl/sample_consensus/model_types.h>
 #include <pcl/segmentation/sac_segmentation.h>
@@ -130,28 +130,21 @@ runDepthPipeline (const pcl::PointCloud<pcl::PointXYZ>::ConstPtr &input, const P
       invalidate ((*cloud)[i]);
   result.ms.emplace_back ("mixed_pixels", msSince (start));
 
-  // 3. Denoise depth inside the box only, which is most of the frame's cost saved.
-  // pcl::MedianFilter moves z only; rescaling x and y keeps the point on its
-  // pixel's viewing ray.
+  // 3. Denoise depth: a median over each point's valid neighbours, moving the point
+  // along its pixel's viewing ray. Everything outside the box is NaN by now, so only the
+  // box is filtered.
   start = Clock::now ();
   if (params.median_window > 1 && cloud->isOrganized ())
   {
-    pcl::MedianFilter<pcl::PointXYZ> median;
+    agex::DepthMedianFilter<pcl::PointXYZ> median;
     median.setInputCloud (cloud);
     median.setWindowSize (params.median_window);
     median.setMaxAllowedMovement (params.median_max_movement);
+    median.setKeepOnViewingRay (true);
     Cloud::Ptr smoothed (new Cloud);
     median.filter (*smoothed);
-    for (std::size_t i = 0; i < smoothed->size (); ++i)
-    {
-      const float z0 = (*cloud)[i].z, z1 = (*smoothed)[i].z;
-      if (std::isfinite (z0) && z0 > 0.f && z1 != z0)
-      {
-        (*smoothed)[i].x *= z1 / z0;
-        (*smoothed)[i].y *= z1 / z0;
-      }
-    }
-    cloud = smoothed;
+    if (!smoothed->empty ())  // empty: bad parameters, reported by the filter
+      cloud = smoothed;
   }
   result.ms.emplace_back ("denoise", msSince (start));
 
@@ -352,6 +345,8 @@ finishPipelineOptions (const std::vector<std::string> &storage, PipelineParams &
     throw std::runtime_error ("--k must be at least 1");
   if (!(params.delta_connected > 0.f) || !(params.delta_orient >= 0.f))
     throw std::runtime_error ("--delta-connected must be > 0 and --delta-orient >= 0");
+  if (!(params.median_max_movement >= 0.f))
+    throw std::runtime_error ("--median-max-movement must be >= 0");
 }
 }  // namespace apps
 }  // namespace agex

@@ -27,7 +27,7 @@ namespace apps
 /** Every tunable of the pipeline, with the documented defaults (doc/pipeline.md). */
 struct PipelineParams
 {
-  // Denoising (pcl::MedianFilter on depth); window 0 or 1 disables it.
+  // Denoising (agex::DepthMedianFilter on depth); window 0 or 1 disables it.
   int median_window = 3;
   float median_max_movement = 0.05f;
   // Mixed pixels (agex::MixedPixelFilter).

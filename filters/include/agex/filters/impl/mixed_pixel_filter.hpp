@@ -4,6 +4,7 @@
 #include <agex/filters/mixed_pixel_filter.h>
 
 #include <cmath>
+#include <limits>
 
 template <typename PointT> bool
 agex::MixedPixelFilter<PointT>::isMixed (int index, const float *ranges) const
@@ -30,7 +31,8 @@ agex::MixedPixelFilter<PointT>::isMixed (int index, const float *ranges) const
       const int i1 = v1 * width + u1, i2 = v2 * width + u2;
       const PointT &q1 = cloud[i1];
       const PointT &q2 = cloud[i2];
-      if (!isFinitePoint (q1) || !isFinitePoint (q2))
+      // Precomputed ranges are NaN for non-finite points: the jump test below skips them.
+      if (!ranges && (!isFinitePoint (q1) || !isFinitePoint (q2)))
         continue;
       const float r1 = range (i1), r2 = range (i2);
       const float jump = std::abs (r2 - r1);
@@ -69,10 +71,14 @@ agex::MixedPixelFilter<PointT>::applyFilter (pcl::Indices &indices)
     return;
   }
   cos_max_veil_angle_ = std::cos (max_veil_angle_deg_ * static_cast<float> (M_PI) / 180.f);
-  // Each point's range is needed by up to 16 tests of its neighbours: compute it once.
+  // Each point's range is needed by up to 16 tests of its neighbours: compute it once,
+  // NaN for a non-finite point (what isMixed relies on to skip it).
   ranges_.resize (input_->size ());
   for (std::size_t i = 0; i < input_->size (); ++i)
-    ranges_[i] = (*input_)[i].getVector3fMap ().norm ();
+  {
+    const PointT &p = (*input_)[i];
+    ranges_[i] = isFinitePoint (p) ? p.getVector3fMap ().norm () : std::numeric_limits<float>::quiet_NaN ();
+  }
 
   indices.reserve (indices_->size ());
   for (const auto index : *indices_)

@@ -35,31 +35,57 @@ agex::SpurFilter<PointT>::applyFilter (pcl::Indices &indices)
       alive.push_back (i);
     }
 
-  std::vector<int> survivors, dropped;
+  // Distances never change between passes, only which neighbours are kept: find each
+  // point's connected neighbours once (a bit per direction of kAllNeighbours) and keep a
+  // count of the kept ones. A pass then only needs to look at the points whose count
+  // dropped in the pass before, the neighbours of what it removed.
+  std::vector<unsigned char> edges (cloud.size (), 0);
+  std::vector<unsigned char> count (cloud.size (), 0);
+  for (const int i : alive)
+  {
+    const int u = i % width, v = i / width;
+    for (int d = 0; d < 8; ++d)
+    {
+      const int nu = u + kAllNeighbours[d][0], nv = v + kAllNeighbours[d][1];
+      if (nu < 0 || nu >= width || nv < 0 || nv >= height)
+        continue;
+      const int j = nv * width + nu;
+      if (kept[j] && squaredDistance3D (cloud[i], cloud[j]) < max_sq)
+      {
+        edges[i] |= static_cast<unsigned char> (1u << d);
+        ++count[i];
+      }
+    }
+  }
+
+  std::vector<int> candidates = alive, dropped;
   for (int pass = 0; pass < iterations_; ++pass)
   {
-    survivors.clear ();
+    // Every decision of a pass uses the counts from before it.
     dropped.clear ();
-    for (const int i : alive)
-    {
-      const int u = i % width, v = i / width;
-      int connected = 0;
-      for (const auto &d : kAllNeighbours)
+    for (const int i : candidates)
+      if (kept[i] && count[i] < min_connected_)
       {
-        const int nu = u + d[0], nv = v + d[1];
-        if (nu < 0 || nu >= width || nv < 0 || nv >= height)
-          continue;
-        const int j = nv * width + nu;
-        if (kept[j] && squaredDistance3D (cloud[i], cloud[j]) < max_sq)
-          ++connected;
+        kept[i] = 0;  // also keeps a candidate listed twice from being dropped twice
+        dropped.push_back (i);
       }
-      (connected >= min_connected_ ? survivors : dropped).push_back (i);
-    }
     if (dropped.empty ())
       break;
+    candidates.clear ();
     for (const int i : dropped)
-      kept[i] = 0;  // all of a pass's decisions use the state before it
-    alive.swap (survivors);
+    {
+      const int u = i % width, v = i / width;
+      for (int d = 0; d < 8; ++d)
+        if (edges[i] & (1u << d))
+        {
+          const int j = (v + kAllNeighbours[d][1]) * width + u + kAllNeighbours[d][0];
+          if (kept[j])
+          {
+            --count[j];
+            candidates.push_back (j);
+          }
+        }
+    }
   }
 
   for (const auto i : *indices_)

@@ -524,7 +524,7 @@ TEST (PcdReader, HostileCompressedDataIsRefused)
 
   // Truncated: the block claims more bytes than the file holds, or the file ends in the sizes.
   expectRefused (compressedPcd (literal48).substr (0, compressedPcd (literal48).size () - 10),
-                 {path, "PCD data size does not match its header", "claims 50 bytes, the file holds 40"});
+                 {path, "PCD data does not match its header", "claims 50 bytes, the file holds 40"});
   expectRefused (kXyzHeader + "DATA binary_compressed\n\x10\x00", {path, "no sizes"});
   // A back-reference before the start of the output.
   expectRefused (compressedPcd (std::string ("\x20\x00", 2) + literal48), {path, "before the start of the data"});

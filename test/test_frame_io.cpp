@@ -494,6 +494,14 @@ compressedPcd (const std::string &lzf)
   return compressedPcd (static_cast<std::uint32_t> (lzf.size ()), 48, lzf);
 }
 
+/** Writes bytes to path and expects readPcd to refuse them with a message holding every needle. */
+void
+expectPcdRefused (const std::string &path, const std::string &bytes, const std::vector<std::string> &needles)
+{
+  writeAll (path, bytes);
+  expectFrameError ([&] { agex::readPcd (path); }, needles);
+}
+
 TEST (PcdReader, HandWrittenLzfBackReferencesDecompress)
 {
   TempDir dir;
@@ -514,8 +522,7 @@ TEST (PcdReader, HostileCompressedDataIsRefused)
   TempDir dir;
   const std::string path = dir.file ("hostile.pcd");
   auto expectRefused = [&] (const std::string &bytes, const std::vector<std::string> &needles) {
-    writeAll (path, bytes);
-    expectFrameError ([&] { agex::readPcd (path); }, needles);
+    expectPcdRefused (path, bytes, needles);
   };
   const std::string literal48 = std::string (1, '\x1f') + std::string (32, '\x01') + std::string (1, '\x0f') +
                                 std::string (16, '\x02');
@@ -548,8 +555,7 @@ TEST (PcdReader, HostileAsciiAndHeadersAreRefused)
   TempDir dir;
   const std::string path = dir.file ("hostile.pcd");
   auto expectRefused = [&] (const std::string &bytes, const std::vector<std::string> &needles) {
-    writeAll (path, bytes);
-    expectFrameError ([&] { agex::readPcd (path); }, needles);
+    expectPcdRefused (path, bytes, needles);
   };
   const std::string ascii = kXyzHeader + "DATA ascii\n";
   writeAll (path, ascii + "1 2 3\n\n4 5 6\nnan nan nan\n-1.5 +2 3e-2\n");

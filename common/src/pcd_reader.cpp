@@ -159,28 +159,37 @@ parseHeader (const std::string &path, std::string_view text)
   return header;
 }
 
-std::uint8_t
-fieldType (char type, std::uint64_t size)
+/** The TYPE and SIZE pairs of PCD fields and the PCL datatype of each. */
+struct PcdType
 {
-  switch (type)
-  {
-  case 'F':
-    return size == 4 ? pcl::PCLPointField::FLOAT32 : size == 8 ? pcl::PCLPointField::FLOAT64 : 0;
-  case 'I':
-    return size == 1   ? pcl::PCLPointField::INT8
-           : size == 2 ? pcl::PCLPointField::INT16
-           : size == 4 ? pcl::PCLPointField::INT32
-           : size == 8 ? pcl::PCLPointField::INT64
-                       : 0;
-  case 'U':
-    return size == 1   ? pcl::PCLPointField::UINT8
-           : size == 2 ? pcl::PCLPointField::UINT16
-           : size == 4 ? pcl::PCLPointField::UINT32
-           : size == 8 ? pcl::PCLPointField::UINT64
-                       : 0;
-  default:
-    return 0;
-  }
+  char type;
+  std::uint64_t size;
+  std::uint8_t datatype;
+};
+constexpr PcdType kPcdTypes[] = {
+    {'F', 4, pcl::PCLPointField::FLOAT32}, {'F', 8, pcl::PCLPointField::FLOAT64}, {'I', 1, pcl::PCLPointField::INT8},
+    {'I', 2, pcl::PCLPointField::INT16},   {'I', 4, pcl::PCLPointField::INT32},   {'I', 8, pcl::PCLPointField::INT64},
+    {'U', 1, pcl::PCLPointField::UINT8},   {'U', 2, pcl::PCLPointField::UINT16},  {'U', 4, pcl::PCLPointField::UINT32},
+    {'U', 8, pcl::PCLPointField::UINT64}};
+
+/** The datatype of a TYPE and SIZE, 0 for a pair PCD does not have. */
+std::uint8_t
+fieldType (std::string_view type, std::uint64_t size)
+{
+  for (const PcdType &t : kPcdTypes)
+    if (type.size () == 1 && type[0] == t.type && size == t.size)
+      return t.datatype;
+  return 0;
+}
+
+/** "F 4", "U 1", ...: a datatype as its PCD TYPE and SIZE. */
+std::string
+typeName (std::uint8_t datatype)
+{
+  for (const PcdType &t : kPcdTypes)
+    if (t.datatype == datatype)
+      return std::string (1, t.type) + " " + std::to_string (t.size);
+  return "?";
 }
 
 /** Fields, offsets and sizes of the cloud from the header; every number checked. */
@@ -202,7 +211,7 @@ layOutCloud (const std::string &path, const PcdHeader &header, pcl::PCLPointClou
         fail (path, "PCD field '" + shown (name) + "' appears twice (damaged FIELDS line)");
     const std::uint64_t size = wholeNumber (path, "SIZE", header.sizes[i]);
     const std::uint64_t count = header.has_count ? wholeNumber (path, "COUNT", header.counts[i]) : 1;
-    const std::uint8_t type = header.types[i].size () == 1 ? fieldType (header.types[i][0], size) : 0;
+    const std::uint8_t type = fieldType (header.types[i], size);
     if (type == 0)
       fail (path, "PCD field '" + shown (name) + "' has TYPE " + shown (header.types[i]) + " and SIZE " +
                       std::to_string (size) + " (damaged SIZE or TYPE line)");
@@ -286,24 +295,6 @@ parseField (std::uint8_t datatype, std::string_view token, std::uint8_t *slot)
   case pcl::PCLPointField::UINT32: return parseNarrowed<std::uint32_t> (token, slot);
   case pcl::PCLPointField::UINT64: return parseValue<std::uint64_t> (token, slot);
   default: return false;
-  }
-}
-
-const char *
-typeName (std::uint8_t datatype)
-{
-  switch (datatype)
-  {
-  case pcl::PCLPointField::FLOAT32: return "F 4";
-  case pcl::PCLPointField::FLOAT64: return "F 8";
-  case pcl::PCLPointField::INT8: return "I 1";
-  case pcl::PCLPointField::INT16: return "I 2";
-  case pcl::PCLPointField::INT32: return "I 4";
-  case pcl::PCLPointField::INT64: return "I 8";
-  case pcl::PCLPointField::UINT8: return "U 1";
-  case pcl::PCLPointField::UINT16: return "U 2";
-  case pcl::PCLPointField::UINT32: return "U 4";
-  default: return "U 8";
   }
 }
 

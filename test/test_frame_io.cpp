@@ -594,6 +594,8 @@ TEST (PcdReader, HostileAsciiAndHeadersAreRefused)
   expectRefused ("FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nWIDTH 2\nHEIGHT 2\nPOINTS 4\n", {path, "bad or missing header"});
   expectRefused ("FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 100000\nWIDTH 2\nHEIGHT 2\nPOINTS 4\n" + body,
                  {path, "larger than the 65536 bytes"});
+  // A header that does not end in the first 64 KiB.
+  expectRefused (std::string (70000, '#') + "\n" + kXyzHeader + body, {path, "no DATA line in its first 65536 bytes"});
   // Binary data shorter than the points.
   expectRefused (kXyzHeader + "DATA binary\n" + std::string (47, '\0'), {path, "binary data of 47 bytes, the header 48"});
 }

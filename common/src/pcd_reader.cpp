@@ -80,7 +80,7 @@ wholeNumber (const std::string &path, const std::string &keyword, std::string_vi
 /** Parses the header from the start of the file. Each keyword at most once and exactly
   * spelled: PCL matches them by prefix and keeps pointers into what a repeated line replaced. */
 PcdHeader
-parseHeader (const std::string &path, std::string_view text)
+parseHeader (const std::string &path, std::string_view text, bool whole_file)
 {
   static const char *const kKeywords[] = {"VERSION", "FIELDS",    "SIZE",   "TYPE", "COUNT",
                                           "WIDTH",   "HEIGHT",    "POINTS", "DATA", "VIEWPOINT"};
@@ -89,8 +89,9 @@ parseHeader (const std::string &path, std::string_view text)
   std::size_t pos = 0;
   while (true)
   {
-    if (pos >= text.size ())
-      fail (path, text.size () >= kMaxHeaderBytes
+    // The header must end inside text; a DATA line cut off by the end of text does not count.
+    if (pos >= text.size () || (!whole_file && text.find ('\n', pos) == std::string_view::npos))
+      fail (path, !whole_file
                       ? "not a readable PCD file (no DATA line in its first " + std::to_string (kMaxHeaderBytes) + " bytes)"
                       : "not a readable PCD file (bad or missing header)");
     std::size_t end = text.find ('\n', pos);
@@ -481,7 +482,7 @@ readPcd (const std::string &path)
   in.seekg (0);
   if (!in.read (head.data (), static_cast<std::streamsize> (head.size ())))
     fail (path, "cannot read file");
-  const PcdHeader header = parseHeader (path, head);
+  const PcdHeader header = parseHeader (path, head, head.size () == file_size);
 
   pcl::PCLPointCloud2 cloud;
   layOutCloud (path, header, cloud);

@@ -245,7 +245,7 @@ layOutCloud (const std::string &path, const PcdHeader &header, pcl::PCLPointClou
 [[noreturn]] void
 failTruncated (const std::string &path, const std::string &detail)
 {
-  fail (path, "PCD data does not match its header: " + detail + " (truncated or corrupted)");
+  fail (path, "PCD data does not match its header: " + detail);
 }
 
 /** One ascii value into its slot; false if it is not a number of the field's type. */

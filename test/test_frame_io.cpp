@@ -548,6 +548,14 @@ TEST (PcdReader, HostileCompressedDataIsRefused)
   expectRefused (compressedPcd (static_cast<std::uint32_t> (literal48.size ()), 47, literal48),
                  {path, "claims 47 bytes, the header 48"});
   expectRefused (compressedPcd (0, 48, ""), {path, "cannot hold the 48"});
+  // A 4096 x 4096 frame (192 MiB of points) from a 2-byte block: refused on the sizes alone.
+  std::string sizes (8, '\0');
+  const std::uint32_t block = 2, claimed = 4096u * 4096u * 12u;
+  std::memcpy (&sizes[0], &block, 4);
+  std::memcpy (&sizes[4], &claimed, 4);
+  expectRefused ("FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nWIDTH 4096\nHEIGHT 4096\nPOINTS 16777216\n"
+                 "DATA binary_compressed\n" + sizes + std::string ("\x00\x01", 2),
+                 {path, "compressed PCD data of 2 bytes cannot hold the 201326592"});
 }
 
 TEST (PcdReader, HostileAsciiAndHeadersAreRefused)

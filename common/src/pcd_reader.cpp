@@ -393,13 +393,13 @@ lzfDecompress (const std::string &path, const std::uint8_t *in, std::size_t in_s
 /** DATA binary_compressed: sizes, LZF, then PCL's field-major layout (all x, all y, ...)
   * back to point-major. */
 void
-readCompressed (const std::string &path, std::ifstream &in, std::uint64_t available, pcl::PCLPointCloud2 &cloud)
+readCompressed (const std::string &path, std::ifstream &in, std::uint64_t available, std::uint64_t expected,
+                pcl::PCLPointCloud2 &cloud)
 {
   std::uint32_t sizes[2] = {0, 0};
   if (available < 8 || !in.read (reinterpret_cast<char *> (sizes), 8))
     failTruncated (path, "the compressed block has no sizes");
   const std::uint64_t compressed = sizes[0], uncompressed = sizes[1];
-  const std::uint64_t expected = cloud.data.size ();
   if (uncompressed != expected)
     fail (path, "compressed PCD data claims " + std::to_string (uncompressed) + " bytes, the header " +
                     std::to_string (expected) + " (corrupted)");
@@ -412,6 +412,7 @@ readCompressed (const std::string &path, std::ifstream &in, std::uint64_t availa
   if (expected > compressed * 88)
     fail (path, "compressed PCD data of " + std::to_string (compressed) + " bytes cannot hold the " +
                     std::to_string (expected) + " the header says (corrupted)");
+  cloud.data.resize (expected);
   std::vector<std::uint8_t> packed (compressed);
   if (!in.read (reinterpret_cast<char *> (packed.data ()), static_cast<std::streamsize> (compressed)))
     failTruncated (path, "the compressed block could not be read");
@@ -500,8 +501,7 @@ readPcd (const std::string &path)
   }
   else if (header.data == "binary_compressed")
   {
-    cloud.data.resize (bytes);
-    readCompressed (path, in, available, cloud);
+    readCompressed (path, in, available, bytes, cloud);
   }
   else
   {

@@ -11,10 +11,11 @@
 #include <agex/classification/contour_annotation.h>
 #include <agex/classification/imglab_dataset.h>
 #include <agex/common/atomic_file.h>
+#include <agex/common/pcd_reader.h>
 
 #include <pcl/PCLPointCloud2.h>
 #include <pcl/common/io.h>
-#include <pcl/io/pcd_io.h>
+#include <pcl/conversions.h>
 
 #include <boost/program_options.hpp>
 #include <nlohmann/json.hpp>
@@ -235,16 +236,12 @@ annotateRgbd (int argc, char **argv)
   std::size_t annotated = 0;
   for (const std::string &input : inputs)
   {
-    pcl::PCLPointCloud2 header;
-    pcl::PCDReader reader;
-    if (reader.readHeader (input, header) < 0)
-      throw std::runtime_error (input + ": cannot read the PCD file");
+    const pcl::PCLPointCloud2 blob = agex::readPcd (input);  // FrameError names the file and the problem
     bool has_colour = false;
-    for (const auto &field : header.fields)
+    for (const auto &field : blob.fields)
       has_colour = has_colour || field.name == "rgb" || field.name == "rgba";
     pcl::PointCloud<pcl::PointXYZRGBA> cloud;
-    if (pcl::io::loadPCDFile (input, cloud) < 0)
-      throw std::runtime_error (input + ": cannot read the PCD file");
+    pcl::fromPCLPointCloud2 (blob, cloud);
     if (cloud.height < 2)
       throw std::runtime_error (input + ": not an organized cloud (height " + std::to_string (cloud.height) + ")");
     const int width = static_cast<int> (cloud.width), height = static_cast<int> (cloud.height);

@@ -5,6 +5,7 @@
 
 #include <agex/common/atomic_file.h>
 #include <agex/common/frame_io.h>
+#include <agex/common/pcd_reader.h>
 
 #include <pcl/io/pcd_io.h>
 
@@ -12,6 +13,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include <csignal>
+#include <cstring>
 #include <fstream>
 #include <random>
 #include <sstream>
@@ -365,6 +367,245 @@ TEST (FrameIo, HugeClaimedSizesAndDamagedFieldsAreRefusedBeforeReading)
   const std::string raw = dir.file ("huge.u16");
   writeAll (raw, "abcd");
   expectFrameError ([&] { agex::loadFrame (raw, options); }, {raw, "100000x100000"});
+}
+
+// ---------------------------------------------------------------------------
+// agex::readPcd against PCL's writer and reader, and hostile files
+
+/** PCL's own reader on a file it wrote (the reference for readPcd on good files). */
+pcl::PCLPointCloud2
+readWithPcl (const std::string &path)
+{
+  pcl::PCLPointCloud2 blob;
+  EXPECT_EQ (pcl::PCDReader ().read (path, blob), 0) << path;
+  return blob;
+}
+
+void
+expectSameCloud (const pcl::PCLPointCloud2 &ours, const pcl::PCLPointCloud2 &pcls)
+{
+  EXPECT_EQ (ours.width, pcls.width);
+  EXPECT_EQ (ours.height, pcls.height);
+  EXPECT_EQ (ours.point_step, pcls.point_step);
+  EXPECT_EQ (ours.row_step, pcls.row_step);
+  EXPECT_EQ (ours.is_dense, pcls.is_dense);
+  ASSERT_EQ (ours.fields.size (), pcls.fields.size ());
+  for (std::size_t i = 0; i < ours.fields.size (); ++i)
+  {
+    EXPECT_EQ (ours.fields[i].name, pcls.fields[i].name);
+    EXPECT_EQ (ours.fields[i].offset, pcls.fields[i].offset);
+    EXPECT_EQ (int (ours.fields[i].datatype), int (pcls.fields[i].datatype));
+    EXPECT_EQ (ours.fields[i].count, pcls.fields[i].count);
+  }
+  EXPECT_TRUE (ours.data == pcls.data) << "data bytes differ";
+}
+
+template <typename PointT>
+void
+expectPcdRoundTrip (const pcl::PointCloud<PointT> &cloud, const TempDir &dir)
+{
+  for (const char *format : {"ascii", "binary", "binary_compressed"})
+  {
+    const std::string path = dir.file (std::string (format) + ".pcd");
+    SCOPED_TRACE (path);
+    const std::string name (format);
+    ASSERT_EQ (name == "ascii"    ? pcl::io::savePCDFileASCII (path, cloud)
+               : name == "binary" ? pcl::io::savePCDFileBinary (path, cloud)
+                                  : pcl::io::savePCDFileBinaryCompressed (path, cloud),
+               0);
+    const pcl::PCLPointCloud2 blob = agex::readPcd (path);
+    expectSameCloud (blob, readWithPcl (path));
+    pcl::PointCloud<PointT> back;
+    pcl::fromPCLPointCloud2 (blob, back);
+    ASSERT_EQ (back.width, cloud.width);
+    ASSERT_EQ (back.height, cloud.height);
+    for (std::size_t i = 0; i < cloud.size (); ++i)
+    {
+      // Every value is a multiple of 1/64 below 4: ascii keeps it exactly too.
+      EXPECT_EQ (bits (back[i].x), bits (cloud[i].x)) << i;
+      EXPECT_EQ (bits (back[i].y), bits (cloud[i].y)) << i;
+      EXPECT_EQ (bits (back[i].z), bits (cloud[i].z)) << i;
+      if constexpr (std::is_same_v<PointT, pcl::PointXYZRGBA>)
+      {
+        EXPECT_EQ (back[i].rgba, cloud[i].rgba) << i;
+      }
+    }
+  }
+}
+
+template <typename PointT>
+pcl::PointCloud<PointT>
+exactlyPrintableCloud (int width, int height)
+{
+  pcl::PointCloud<PointT> cloud (width, height);
+  std::mt19937 rng (9);
+  std::uniform_int_distribution<int> steps (-255, 255);
+  for (auto &p : cloud.points)
+  {
+    p.x = steps (rng) / 64.f;
+    p.y = steps (rng) / 64.f;
+    p.z = 2.f + steps (rng) / 128.f;
+    if constexpr (std::is_same_v<PointT, pcl::PointXYZRGBA>)
+      p.rgba = static_cast<std::uint32_t> (rng ());
+  }
+  cloud (3, 2).x = cloud (3, 2).y = cloud (3, 2).z = nanf_ ();
+  cloud (0, 0).z = nanf_ ();
+  cloud.is_dense = false;
+  return cloud;
+}
+
+TEST (PcdReader, ReadsWhatPclWritesAsPclDoes)
+{
+  TempDir dir;
+  expectPcdRoundTrip (exactlyPrintableCloud<pcl::PointXYZ> (7, 5), dir);
+  expectPcdRoundTrip (exactlyPrintableCloud<pcl::PointXYZRGBA> (7, 5), dir);
+  // A dense cloud stays dense.
+  auto dense = exactlyPrintableCloud<pcl::PointXYZ> (4, 3);
+  dense (3, 2).x = dense (3, 2).y = dense (0, 0).z = 1.f;
+  dense (3, 2).z = 1.f;
+  dense.is_dense = true;
+  ASSERT_EQ (pcl::io::savePCDFileBinaryCompressed (dir.file ("dense.pcd"), dense), 0);
+  EXPECT_TRUE (agex::readPcd (dir.file ("dense.pcd")).is_dense);
+}
+
+TEST (PcdReader, SharedKinectFrameReadsAsPclReadsIt)
+{
+  const std::string pcd = sharedData ("kinect/five_people.pcd");
+  AGEX_REQUIRE_SHARED_FILE (pcd, "the Kinect test data (../shared/data/kinect)");
+  expectSameCloud (agex::readPcd (pcd), readWithPcl (pcd));
+}
+
+const std::string kXyzHeader = "# .PCD v0.7\nVERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n"
+                               "WIDTH 2\nHEIGHT 2\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 4\n";
+
+/** A binary_compressed 2x2 xyz file: the two sizes, then the LZF bytes. */
+std::string
+compressedPcd (std::uint32_t compressed_size, std::uint32_t uncompressed_size, const std::string &lzf)
+{
+  std::string sizes (8, '\0');
+  std::memcpy (&sizes[0], &compressed_size, 4);
+  std::memcpy (&sizes[4], &uncompressed_size, 4);
+  return kXyzHeader + "DATA binary_compressed\n" + sizes + lzf;
+}
+
+std::string
+compressedPcd (const std::string &lzf)
+{
+  return compressedPcd (static_cast<std::uint32_t> (lzf.size ()), 48, lzf);
+}
+
+/** Writes bytes to path and expects readPcd to refuse them with a message holding every needle. */
+void
+expectPcdRefused (const std::string &path, const std::string &bytes, const std::vector<std::string> &needles)
+{
+  writeAll (path, bytes);
+  expectFrameError ([&] { agex::readPcd (path); }, needles);
+}
+
+TEST (PcdReader, HandWrittenLzfBackReferencesDecompress)
+{
+  TempDir dir;
+  // A literal 1.0f, then one long back-reference 4 bytes back copying 44 bytes over itself.
+  std::string lzf ("\x03\x00\x00\x80\x3f", 5);
+  lzf += std::string ("\xe0\x23\x03", 3);  // (7 << 5) | 0, 7 + 35 + 2 = 44 bytes, distance 3 + 1
+  const std::string path = dir.file ("ones.pcd");
+  writeAll (path, compressedPcd (lzf));
+  pcl::PointCloud<pcl::PointXYZ> cloud;
+  pcl::fromPCLPointCloud2 (agex::readPcd (path), cloud);
+  ASSERT_EQ (cloud.size (), 4u);
+  for (const auto &p : cloud.points)
+    EXPECT_TRUE (p.x == 1.f && p.y == 1.f && p.z == 1.f);
+}
+
+TEST (PcdReader, HostileCompressedDataIsRefused)
+{
+  TempDir dir;
+  const std::string path = dir.file ("hostile.pcd");
+  auto expectRefused = [&] (const std::string &bytes, const std::vector<std::string> &needles) {
+    expectPcdRefused (path, bytes, needles);
+  };
+  const std::string literal48 = std::string (1, '\x1f') + std::string (32, '\x01') + std::string (1, '\x0f') +
+                                std::string (16, '\x02');
+  writeAll (path, compressedPcd (literal48));
+  EXPECT_EQ (agex::readPcd (path).data.size (), 48u);  // the well-formed base of the cases below
+
+  // Truncated: the block claims more bytes than the file holds, or the file ends in the sizes.
+  expectRefused (compressedPcd (literal48).substr (0, compressedPcd (literal48).size () - 10),
+                 {path, "PCD data does not match its header", "claims 50 bytes, the file holds 40"});
+  expectRefused (kXyzHeader + "DATA binary_compressed\n\x10\x00", {path, "no sizes"});
+  // A back-reference before the start of the output.
+  expectRefused (compressedPcd (std::string ("\x20\x00", 2) + literal48), {path, "before the start of the data"});
+  // A literal run past the end of the compressed data.
+  expectRefused (compressedPcd (std::string ("\x1f\x01\x02\x03\x04\x05", 6)), {path, "goes past the end"});
+  // More output than the header's points: by a literal run and by a back-reference.
+  expectRefused (compressedPcd (literal48 + std::string ("\x00\x07", 2)), {path, "more than the 48 bytes"});
+  expectRefused (compressedPcd (literal48 + std::string ("\x20\x00", 2)), {path, "more than the 48 bytes"});
+  // Less output than the header's points.
+  expectRefused (compressedPcd (literal48.substr (0, 33)), {path, "decompresses to 32 bytes", "48"});
+  // A back-reference cut off at the end of the data.
+  expectRefused (compressedPcd (literal48.substr (0, 33) + std::string ("\xe0", 1)), {path, "cut off"});
+  // The uncompressed size is not the points' size; a size no LZF block of its length can give.
+  expectRefused (compressedPcd (static_cast<std::uint32_t> (literal48.size ()), 47, literal48),
+                 {path, "claims 47 bytes, the header 48"});
+  expectRefused (compressedPcd (0, 48, ""), {path, "cannot hold the 48"});
+  // A 4096 x 4096 frame (192 MiB of points) from a 2-byte block: refused on the sizes alone.
+  std::string sizes (8, '\0');
+  const std::uint32_t block = 2, claimed = 4096u * 4096u * 12u;
+  std::memcpy (&sizes[0], &block, 4);
+  std::memcpy (&sizes[4], &claimed, 4);
+  expectRefused ("FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nWIDTH 4096\nHEIGHT 4096\nPOINTS 16777216\n"
+                 "DATA binary_compressed\n" + sizes + std::string ("\x00\x01", 2),
+                 {path, "compressed PCD data of 2 bytes cannot hold the 201326592"});
+}
+
+TEST (PcdReader, HostileAsciiAndHeadersAreRefused)
+{
+  TempDir dir;
+  const std::string path = dir.file ("hostile.pcd");
+  auto expectRefused = [&] (const std::string &bytes, const std::vector<std::string> &needles) {
+    expectPcdRefused (path, bytes, needles);
+  };
+  const std::string ascii = kXyzHeader + "DATA ascii\n";
+  writeAll (path, ascii + "1 2 3\n\n4 5 6\nnan nan nan\n-1.5 +2 3e-2\n");
+  pcl::PointCloud<pcl::PointXYZ> cloud;
+  pcl::fromPCLPointCloud2 (agex::readPcd (path), cloud);
+  EXPECT_EQ (cloud (1, 0).z, 6.f);
+  EXPECT_TRUE (std::isnan (cloud (0, 1).x));
+  EXPECT_EQ (cloud (1, 1).y, 2.f);
+  EXPECT_FLOAT_EQ (cloud (1, 1).z, 0.03f);
+
+  expectRefused (ascii + "10 20 30\n4 5\n10 20 30\n10 20 30\n", {path, "point 2 has 2 values, the header 3"});
+  expectRefused (ascii + "1 2 3\n1 2 3 4\n1 2 3\n1 2 3\n", {path, "point 2 has 4 values, the header 3"});
+  expectRefused (ascii + "10 20 30\n10 20 30\n10 20 30\n", {path, "ascii data has 3 points, the header 4"});
+  expectRefused (ascii + "1 2 3\n1 2 3\n1 2 3\n1 2 3\n1 2 3\n", {path, "more lines than its 4 points"});
+  expectRefused (ascii + "1 2 3\n1 2 3\n1 x 3\n1 2 3\n", {path, "point 3: 'x' is not a number of field 'y'"});
+  expectRefused (ascii + "1 2 3\n1 2 3\n1 1e39 3\n1 2 3\n", {path, "'1e39' is not a number"});
+  const std::string bytes_header = "VERSION 0.7\nFIELDS x y z i\nSIZE 4 4 4 1\nTYPE F F F U\nWIDTH 2\nHEIGHT 1\nPOINTS 2\nDATA ascii\n";
+  writeAll (path, bytes_header + "1 2 3 255\n1 2 3 0\n");
+  EXPECT_EQ (agex::readPcd (path).data[12], 255);
+  expectRefused (bytes_header + "1 2 3 256\n1 2 3 0\n", {path, "'256' is not a number of field 'i' (TYPE and SIZE U 1)"});
+  expectRefused (bytes_header + "1 2 3 -1\n1 2 3 0\n", {path, "'-1' is not a number"});
+
+  // A SIZE its TYPE does not have, a missing COUNT value, POINTS not WIDTH x HEIGHT, an
+  // unknown DATA kind, a repeated field, a header without DATA.
+  const std::string body = "DATA ascii\n1 2 3\n1 2 3\n1 2 3\n1 2 3\n";
+  expectRefused ("FIELDS x y z\nSIZE 4 4 2\nTYPE F F F\nWIDTH 2\nHEIGHT 2\nPOINTS 4\n" + body,
+                 {path, "field 'z' has TYPE F and SIZE 2 (damaged SIZE or TYPE line)"});
+  expectRefused ("FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1\nWIDTH 2\nHEIGHT 2\nPOINTS 4\n" + body,
+                 {path, "3 fields but 3 sizes, 3 types and 2 counts"});
+  expectRefused ("FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nWIDTH 2\nHEIGHT 2\nPOINTS 5\n" + body,
+                 {path, "POINTS 5 but WIDTH x HEIGHT is 2x2"});
+  expectRefused ("FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nWIDTH 2\nHEIGHT 2\nPOINTS 4\nDATA binary_lzma\n",
+                 {path, "DATA line says 'binary_lzma'"});
+  expectRefused ("FIELDS x y x\nSIZE 4 4 4\nTYPE F F F\nWIDTH 2\nHEIGHT 2\nPOINTS 4\n" + body,
+                 {path, "field 'x' appears twice"});
+  expectRefused ("FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nWIDTH 2\nHEIGHT 2\nPOINTS 4\n", {path, "bad or missing header"});
+  expectRefused ("FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 100000\nWIDTH 2\nHEIGHT 2\nPOINTS 4\n" + body,
+                 {path, "larger than the 65536 bytes"});
+  // A header that does not end in the first 64 KiB.
+  expectRefused (std::string (70000, '#') + "\n" + kXyzHeader + body, {path, "no DATA line in its first 65536 bytes"});
+  // Binary data shorter than the points.
+  expectRefused (kXyzHeader + "DATA binary\n" + std::string (47, '\0'), {path, "binary data of 47 bytes, the header 48"});
 }
 
 TEST (FrameIo, MissingFileDirectoryAndUnknownFormat)

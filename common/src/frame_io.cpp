@@ -1,21 +1,16 @@
 #include <agex/common/frame_io.h>
+#include <agex/common/pcd_reader.h>
 
 #include <pcl/PCLPointCloud2.h>
 #include <pcl/conversions.h>
-#include <pcl/io/pcd_io.h>
 
 #include <opencv2/imgcodecs.hpp>
 
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
-#include <cstring>
 #include <fstream>
-#include <iterator>
 #include <limits>
-#include <set>
-#include <sstream>
-#include <vector>
 
 namespace fs = std::filesystem;
 
@@ -37,14 +32,6 @@ fail (const std::string &path, const std::string &problem)
   throw FrameError (path + ": " + problem);
 }
 
-void
-checkFrameSize (const std::string &path, std::uint64_t width, std::uint64_t height)
-{
-  if (width > kMaxFramePixels || height > kMaxFramePixels || width * height > kMaxFramePixels)
-    fail (path, "claims a " + std::to_string (width) + "x" + std::to_string (height) +
-                    " frame, more than the " + std::to_string (kMaxFramePixels) + " pixels agex reads");
-}
-
 /** A PNG's size from its IHDR chunk (bytes 16..23, big-endian), read before decoding so
   * that a damaged header cannot make the decoder allocate gigabytes. */
 void
@@ -63,10 +50,9 @@ checkPngSize (const std::string &path)
   checkFrameSize (path, big_endian (head + 16), big_endian (head + 20));
 }
 
-/** PCL's PCD parser accepts headers whose fields do not fit the point (repeated FIELDS or
-  * SIZE lines, zero sizes); pcl::fromPCLPointCloud2 would then read past each point. */
+/** agex stages read x, y, z as single floats from any organized cloud. */
 void
-checkPcdFields (const std::string &path, const pcl::PCLPointCloud2 &cloud)
+checkXyzFields (const std::string &path, const pcl::PCLPointCloud2 &cloud)
 {
   for (const char *name : {"x", "y", "z"})
   {
@@ -77,164 +63,18 @@ checkPcdFields (const std::string &path, const pcl::PCLPointCloud2 &cloud)
     if (field->datatype != pcl::PCLPointField::FLOAT32 || field->count != 1)
       fail (path, std::string ("PCD field '") + name + "' is not a single 4-byte float (TYPE F, SIZE 4, COUNT 1)");
   }
-  for (const auto &f : cloud.fields)
-  {
-    const std::uint64_t size = pcl::getFieldSize (f.datatype);
-    if (size == 0 || f.count == 0 || f.offset + size * f.count > cloud.point_step)
-      fail (path, "PCD field '" + f.name + "' does not fit its point (damaged FIELDS, SIZE, TYPE or COUNT line)");
-  }
-}
-
-/** PCL's header parser allocates the cloud the POINTS line claims before returning, and
-  * its binary_compressed reader the uncompressed size the data claims: the sizes are
-  * checked here first, from the file itself. */
-void
-checkPcdHeaderSizes (const std::string &path)
-{
-  std::ifstream in (path, std::ios::binary);
-  std::uint64_t width = 0, height = 1, points = 0, point_step = 0;
-  std::vector<std::uint64_t> sizes, counts;
-  std::vector<std::string> types;
-  std::string line, data;
-  // PCL's header parser matches keywords by prefix and, given one twice, keeps pointers into
-  // what the second one replaced (heap corruption while reading the body; found by fuzzing):
-  // each keyword may appear once, and its numbers must be whole numbers.
-  static const char *const kKeywords[] = {"VERSION", "FIELDS", "COLUMNS", "SIZE", "TYPE", "COUNT",
-                                          "WIDTH",   "HEIGHT", "VIEWPOINT", "POINTS", "DATA"};
-  std::set<std::string> seen;
-  std::size_t fields = 0;
-  for (int lines = 0; lines < 64 && std::getline (in, line); ++lines)
-  {
-    std::istringstream words (line);
-    std::string key;
-    words >> key;
-    const std::streampos after_key = words.tellg ();
-    for (const char *keyword : kKeywords)
-      if (key.compare (0, std::strlen (keyword), keyword) == 0)
-      {
-        const std::string name = std::strcmp (keyword, "COLUMNS") == 0 ? "FIELDS" : keyword;
-        if (!seen.insert (name).second)
-          fail (path, "PCD header has more than one " + name + " line (damaged header)");
-        if (key != keyword)
-          fail (path, "PCD header line '" + line.substr (0, 40) + "' is damaged");
-        if (name == "SIZE" || name == "COUNT" || name == "WIDTH" || name == "HEIGHT" || name == "POINTS")
-          for (std::string token; words >> token;)
-            if (token.find_first_not_of ("0123456789") != std::string::npos)
-              fail (path, "PCD " + name + " line holds '" + token.substr (0, 20) + "', not a whole number");
-        words.clear ();
-        words.seekg (after_key);
-        break;
-      }
-    std::uint64_t *value = key == "WIDTH" ? &width : key == "HEIGHT" ? &height : key == "POINTS" ? &points : nullptr;
-    if (value && !(words >> *value))
-      *value = 0;  // PCL reports malformed numbers itself
-    std::vector<std::uint64_t> *list = key == "SIZE" ? &sizes : key == "COUNT" ? &counts : nullptr;
-    if (list)
-      list->clear ();  // a repeated line replaces the earlier one, as in PCL
-    for (std::uint64_t v = 0; list && words >> v;)
-      list->push_back (v);
-    if (key == "FIELDS" || key == "COLUMNS")
-      fields = static_cast<std::size_t> (std::distance (std::istream_iterator<std::string> (words),
-                                                        std::istream_iterator<std::string> ()));
-    if (key == "TYPE")
-      types.assign (std::istream_iterator<std::string> (words), std::istream_iterator<std::string> ());
-    if (key == "DATA")
-    {
-      words >> data;
-      break;
-    }
-  }
-  // Every field needs its SIZE and TYPE (and COUNT, when given): PCL lays out the point from
-  // them and writes values of the field's type into it regardless.
-  if (fields == 0 || sizes.size () != fields || types.size () != fields ||
-      (seen.count ("COUNT") && counts.size () != fields))
-    fail (path, "PCD header has " + std::to_string (fields) + " fields but " + std::to_string (sizes.size ()) +
-                    " sizes, " + std::to_string (types.size ()) + " types and " + std::to_string (counts.size ()) +
-                    " counts (damaged FIELDS, SIZE, TYPE or COUNT line)");
-  checkFrameSize (path, width, height);
-  if (points > kMaxFramePixels)
-    fail (path, "claims " + std::to_string (points) + " points, more than the " + std::to_string (kMaxFramePixels) +
-                    " pixels agex reads");
-  // PCL's ascii reader writes each value with the size of its TYPE into a slot of the
-  // size of its SIZE: they must agree (F: 4 or 8 bytes; I, U: 1, 2, 4 or 8).
-  for (std::size_t i = 0; i < std::min (sizes.size (), types.size ()); ++i)
-  {
-    const std::uint64_t size = sizes[i];
-    const bool valid = types[i] == "F" ? (size == 4 || size == 8)
-                                       : (types[i] == "I" || types[i] == "U") &&
-                                             (size == 1 || size == 2 || size == 4 || size == 8);
-    if (!valid)
-      fail (path, "PCD field " + std::to_string (i + 1) + " has TYPE " + types[i] + " and SIZE " +
-                      std::to_string (size) + " (damaged SIZE or TYPE line)");
-  }
-  for (std::size_t i = 0; i < sizes.size (); ++i)
-    point_step += std::min<std::uint64_t> (sizes[i], 8) * std::min<std::uint64_t> (i < counts.size () ? counts[i] : 1, 1u << 20);
-  if (data == "binary_compressed")
-  {
-    std::uint32_t compressed = 0, uncompressed = 0;
-    in.read (reinterpret_cast<char *> (&compressed), 4);
-    in.read (reinterpret_cast<char *> (&uncompressed), 4);
-    if (in && uncompressed != width * height * point_step)
-      fail (path, "compressed PCD data claims " + std::to_string (uncompressed) + " bytes, the header " +
-                      std::to_string (width * height * point_step) + " (corrupted)");
-  }
-}
-
-pcl::PCLPointCloud2
-readPCD (const std::string &path)
-{
-  checkPcdHeaderSizes (path);
-  pcl::PCDReader reader;
-  pcl::PCLPointCloud2 header;
-  Eigen::Vector4f origin;
-  Eigen::Quaternionf orientation;
-  int version = 0, type = 0;
-  unsigned int offset = 0;
-  if (reader.readHeader (path, header, origin, orientation, version, type, offset) < 0)
-    fail (path, "not a readable PCD file (bad or missing header)");
-  checkPcdFields (path, header);
-  if (header.height <= 1)
-    fail (path, "PCD cloud is not organized (height " + std::to_string (header.height) +
-                    "); agex stages need an organized depth frame");
-  if (header.width < 1)
-    fail (path, "PCD cloud has no points (width 0)");
-  checkFrameSize (path, header.width, header.height);
-  // PCL allocates the whole cloud from the header before reading the data: check that
-  // the file can hold it (binary: every byte; ascii: at least a byte per point).
-  std::error_code ec;
-  const std::uint64_t file_size = fs::file_size (path, ec);
-  const std::uint64_t points = std::uint64_t (header.width) * header.height;
-  if (!ec && type == 1 && file_size < offset + points * header.point_step)
-    fail (path, "PCD data size does not match its header (truncated or corrupted)");
-  if (!ec && type == 0 && file_size < offset + points)
-    fail (path, "PCD data size does not match its header (truncated or corrupted)");
-
-  pcl::PCLPointCloud2 blob;
-  if (reader.read (path, blob) < 0)
-    fail (path, "PCD data could not be read (truncated or corrupted)");
-  if (static_cast<std::size_t> (blob.width) * blob.height * blob.point_step != blob.data.size ())
-    fail (path, "PCD data size does not match its header (truncated or corrupted)");
-  checkPcdFields (path, blob);
-  return blob;
 }
 
 Frame
 loadPCD (const std::string &path)
 {
-  pcl::PCLPointCloud2 blob;
-  try
-  {
-    blob = readPCD (path);
-  }
-  catch (const FrameError &)
-  {
-    throw;
-  }
-  catch (const std::exception &e)
-  {
-    // PCL's header parser lets conversion errors through (std::invalid_argument, ...).
-    fail (path, std::string ("not a readable PCD file (") + e.what () + ")");
-  }
+  const pcl::PCLPointCloud2 blob = readPcd (path);
+  checkXyzFields (path, blob);
+  if (blob.height <= 1)
+    fail (path, "PCD cloud is not organized (height " + std::to_string (blob.height) +
+                    "); agex stages need an organized depth frame");
+  if (blob.width < 1)
+    fail (path, "PCD cloud has no points (width 0)");
 
   Frame frame;
   frame.path = path;
@@ -272,6 +112,14 @@ readRawU16 (const std::string &path, int width, int height)
   return depth;
 }
 }  // namespace
+
+void
+checkFrameSize (const std::string &path, std::uint64_t width, std::uint64_t height)
+{
+  if (width > kMaxFramePixels || height > kMaxFramePixels || width * height > kMaxFramePixels)
+    fail (path, "claims a " + std::to_string (width) + "x" + std::to_string (height) +
+                    " frame, more than the " + std::to_string (kMaxFramePixels) + " pixels agex reads");
+}
 
 double
 defaultDepthScale (int cv_depth)

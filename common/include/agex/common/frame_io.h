@@ -8,6 +8,7 @@
 
 #include <opencv2/core.hpp>
 
+#include <cstdint>
 #include <stdexcept>
 #include <string>
 
@@ -45,6 +46,10 @@ class FrameError : public std::runtime_error
 public:
   using std::runtime_error::runtime_error;
 };
+
+/** \brief Refuses a frame larger than kMaxFramePixels before anything of its size is allocated.
+  * \throws FrameError naming the file and the claimed size */
+void checkFrameSize (const std::string &path, std::uint64_t width, std::uint64_t height);
 
 /** A loaded frame. */
 struct Frame

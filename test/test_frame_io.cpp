@@ -580,6 +580,12 @@ TEST (PcdReader, HostileAsciiAndHeadersAreRefused)
   expectRefused (ascii + "1 2 3\n1 2 3\n1 2 3\n1 2 3\n1 2 3\n", {path, "more lines than its 4 points"});
   expectRefused (ascii + "1 2 3\n1 2 3\n1 x 3\n1 2 3\n", {path, "point 3: 'x' is not a number of field 'y'"});
   expectRefused (ascii + "1 2 3\n1 2 3\n1 1e39 3\n1 2 3\n", {path, "'1e39' is not a number"});
+  // Too small for a float is read as PCL reads it, not refused.
+  writeAll (path, ascii + "1 2 3\n1 2 3\n1 1e-50 -1e-42\n1 2 3\n");
+  pcl::fromPCLPointCloud2 (agex::readPcd (path), cloud);
+  EXPECT_EQ (cloud (0, 1).y, 0.f);
+  EXPECT_LT (cloud (0, 1).z, 0.f);
+  EXPECT_GT (cloud (0, 1).z, -1e-41f);
   const std::string bytes_header = "VERSION 0.7\nFIELDS x y z i\nSIZE 4 4 4 1\nTYPE F F F U\nWIDTH 2\nHEIGHT 1\nPOINTS 2\nDATA ascii\n";
   writeAll (path, bytes_header + "1 2 3 255\n1 2 3 0\n");
   EXPECT_EQ (agex::readPcd (path).data[12], 255);

@@ -257,7 +257,20 @@ parseValue (std::string_view token, std::uint8_t *slot)
     token.remove_prefix (1);
   T value{};
   const auto [end, ec] = std::from_chars (token.data (), token.data () + token.size (), value);
-  if (ec != std::errc () || end != token.data () + token.size ())
+  if (end != token.data () + token.size ())
+    return false;
+  if constexpr (std::is_floating_point_v<T>)
+    if (ec == std::errc::result_out_of_range)
+    {
+      // Too small for T is read as PCL reads it (a denormal or zero); too large is refused.
+      const long double wide = std::strtold (std::string (token).c_str (), nullptr);
+      if (!(std::fabs (wide) < 1.0L))
+        return false;
+      value = static_cast<T> (wide);
+      std::memcpy (slot, &value, sizeof (T));
+      return true;
+    }
+  if (ec != std::errc ())
     return false;
   std::memcpy (slot, &value, sizeof (T));
   return true;

@@ -17,7 +17,7 @@ start=$(date +%s)
 pid=$!
 while kill -0 "$pid" 2>/dev/null; do
   rss=$(awk '/^VmRSS/ {print $2}' "/proc/$pid/status" 2>/dev/null)
-  frames=$(wc -l < "$OUT/detections.jsonl" 2>/dev/null || echo 0)
+  frames=$(cat "$OUT/detections.jsonl" 2>/dev/null | wc -l)
   [ -n "$rss" ] && echo "$(( $(date +%s) - start )),$frames,$rss" >> "$OUT/rss.csv"
   sleep "$EVERY"
 done

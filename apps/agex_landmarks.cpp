@@ -8,6 +8,7 @@
 #include <agex/common/atomic_file.h>
 
 #include <boost/program_options.hpp>
+#include <opencv2/core/utils/logger.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/videoio.hpp>
 
@@ -63,6 +64,7 @@ void
 stopReading (int)
 {
   interrupted = 1;
+  std::signal (SIGINT, SIG_DFL);  // a second Ctrl-C ends a read that blocks
 }
 }  // namespace
 
@@ -97,6 +99,8 @@ main (int argc, char **argv)
       return 0;
     if (inputs.empty () && video.empty ())
       throw std::runtime_error ("no INPUT image or --video given (see --help)");
+    if (!(opencv_scale > 0.05 && opencv_scale <= 4.0))
+      throw std::runtime_error ("--opencv-scale must lie in (0.05, 4]");
     std::vector<std::string> read = inputs;
     read.push_back (model_path);
     if (!video.empty ())
@@ -136,7 +140,11 @@ main (int argc, char **argv)
     {
       cv::VideoCapture capture;
       const bool camera = !video.empty () && std::all_of (video.begin (), video.end (), ::isdigit);
-      if (camera ? !capture.open (std::stoi (video)) : !capture.open (video))
+      // OpenCV logs each backend that fails to open the input; the one error below says it.
+      const auto log_level = cv::utils::logging::setLogLevel (cv::utils::logging::LOG_LEVEL_SILENT);
+      const bool opened = camera ? capture.open (std::stoi (video)) : capture.open (video);
+      cv::utils::logging::setLogLevel (log_level);
+      if (!opened)
         throw std::runtime_error (video + ": cannot open the video or camera");
       std::signal (SIGINT, stopReading);
       cv::Mat frame;

@@ -56,6 +56,8 @@ main (int argc, char **argv)
       throw std::runtime_error ("give --model MODEL, or --folds K to cross-validate");
     if (folds == 1 || folds < 0)
       throw std::runtime_error ("--folds needs at least 2 folds");
+    if (!(opencv_scale > 0.05 && opencv_scale <= 4.0))
+      throw std::runtime_error ("--opencv-scale must lie in (0.05, 4]");
     if (!json_path.empty ())
     {
       std::vector<std::string> read = dataset_paths;

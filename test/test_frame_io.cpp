@@ -548,6 +548,8 @@ TEST (PcdReader, HostileCompressedDataIsRefused)
   expectRefused (compressedPcd (static_cast<std::uint32_t> (literal48.size ()), 47, literal48),
                  {path, "claims 47 bytes, the header 48"});
   expectRefused (compressedPcd (0, 48, ""), {path, "cannot hold the 48"});
+  // A block longer than LZF makes of 48 bytes even as literals (refused before it is read).
+  expectRefused (compressedPcd (literal48 + std::string (50, '\x01')), {path, "more than LZF makes of the 48"});
   // A 4096 x 4096 frame (192 MiB of points) from a 2-byte block: refused on the sizes alone.
   std::string sizes (8, '\0');
   const std::uint32_t block = 2, claimed = 4096u * 4096u * 12u;
@@ -580,6 +582,15 @@ TEST (PcdReader, HostileAsciiAndHeadersAreRefused)
   expectRefused (ascii + "1 2 3\n1 2 3\n1 2 3\n1 2 3\n1 2 3\n", {path, "more lines than its 4 points"});
   expectRefused (ascii + "1 2 3\n1 2 3\n1 x 3\n1 2 3\n", {path, "point 3: 'x' is not a number of field 'y'"});
   expectRefused (ascii + "1 2 3\n1 2 3\n1 1e39 3\n1 2 3\n", {path, "'1e39' is not a number"});
+  // PCL's TYPE letters in either case, and B (bool) of size 1.
+  writeAll (path, "FIELDS x y z valid\nSIZE 4 4 4 1\nTYPE f F f B\nWIDTH 2\nHEIGHT 1\nPOINTS 2\nDATA ascii\n"
+                  "1 2 3 1\n4 5 6 0\n");
+  const pcl::PCLPointCloud2 with_bool = agex::readPcd (path);
+  ASSERT_EQ (with_bool.fields.size (), 4u);
+  EXPECT_EQ (with_bool.fields[0].datatype, pcl::PCLPointField::FLOAT32);
+  EXPECT_EQ (with_bool.fields[3].datatype, pcl::PCLPointField::BOOL);
+  EXPECT_EQ (with_bool.data[12], 1);
+  EXPECT_EQ (with_bool.data[13 + 12], 0);
   // Too small for a float is read as PCL reads it, not refused.
   writeAll (path, ascii + "1 2 3\n1 2 3\n1 1e-50 -1e-42\n1 2 3\n");
   pcl::fromPCLPointCloud2 (agex::readPcd (path), cloud);

@@ -611,10 +611,13 @@ TEST (LandmarkApps, VideoFileFrameByFrame)
   }
   EXPECT_GT (people, 0u);
 
-  // --max-frames stops early; a file that is no video is refused.
+  // --max-frames stops early; a missing video and a file that is no video are refused.
   ASSERT_EQ (run (std::string (AGEX_LANDMARKS_EXECUTABLE) + " --video " + video + " --max-frames 2 --json " + from_video), 0);
   EXPECT_EQ (nlohmann::json::parse (readAll (from_video))["frames"].size (), 2u);
   EXPECT_NE (run (std::string (AGEX_LANDMARKS_EXECUTABLE) + " --video " + decoded[0] + "x --json " + from_video), 0);
+  const std::string text = (dir / "notes.txt").string ();
+  writeAll (text, "not a video\n");
+  EXPECT_NE (run (std::string (AGEX_LANDMARKS_EXECUTABLE) + " --video " + text + " --json " + from_video), 0);
   fs::remove_all (dir);
 }
 #endif

@@ -13,14 +13,26 @@
 #include <opencv2/imgproc.hpp>
 #include <opencv2/objdetect.hpp>
 
+#include <algorithm>
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
+#include <tuple>
 
 namespace agex
 {
 namespace
 {
+/** Highest score first; ties by position, so that the order never depends on the search. */
+void
+sortByScore (std::vector<PersonDetection> &people)
+{
+  std::sort (people.begin (), people.end (), [] (const PersonDetection &a, const PersonDetection &b) {
+    return std::make_tuple (-a.score, a.box.y, a.box.x, a.box.width) <
+           std::make_tuple (-b.score, b.box.y, b.box.x, b.box.width);
+  });
+}
+
 using detail::toDlib;
 using detail::toCv;
 using Scanner = dlib::scan_fhog_pyramid<dlib::pyramid_down<6>>;
@@ -188,13 +200,37 @@ PeopleDetector::detect (const cv::Mat &image, double threshold) const
   const cv::Mat grey = toGrey (image);
   cv::Mat resized = grey;
   if (impl_->scale != 1.0)
-    cv::resize (grey, resized, cv::Size (), impl_->scale, impl_->scale, cv::INTER_AREA);
+    cv::resize (grey, resized, cv::Size (), impl_->scale, impl_->scale,
+                impl_->scale < 1.0 ? cv::INTER_AREA : cv::INTER_LINEAR);
   if (impl_->opencv_default)
   {
+    // HOGDescriptor::detectMultiScale's pyramid (steps of 1.05, then groups of at least 3
+    // windows), run level by level here: OpenCV 4.6 scans the levels in parallel and appends
+    // boxes and scores under separate locks, so a score could end up paired with another
+    // level's box, and the order changed from run to run.
     std::vector<cv::Rect> found;
     std::vector<double> weights;
-    if (resized.cols >= impl_->hog.winSize.width && resized.rows >= impl_->hog.winSize.height)
-      impl_->hog.detectMultiScale (resized, found, weights, threshold, cv::Size (8, 8), cv::Size (0, 0), 1.05, 2.0);
+    const cv::HOGDescriptor &hog = impl_->hog;
+    double level = 1.0;
+    for (int n = 0; n < hog.nlevels; ++n, level *= 1.05)
+    {
+      const cv::Size size (cvRound (resized.cols / level), cvRound (resized.rows / level));
+      if (size.width < hog.winSize.width || size.height < hog.winSize.height)
+        break;
+      cv::Mat scaled = resized;
+      if (n > 0)
+        cv::resize (resized, scaled, size, 0, 0, cv::INTER_LINEAR);
+      std::vector<cv::Point> hits;
+      std::vector<double> hit_scores;
+      hog.detect (scaled, hits, hit_scores, threshold, cv::Size (8, 8), cv::Size (0, 0));
+      for (std::size_t i = 0; i < hits.size () && i < hit_scores.size (); ++i)
+      {
+        found.emplace_back (cvRound (hits[i].x * level), cvRound (hits[i].y * level),
+                            cvRound (hog.winSize.width * level), cvRound (hog.winSize.height * level));
+        weights.push_back (hit_scores[i]);
+      }
+    }
+    hog.groupRectangles (found, weights, 2, 0.2);
     for (std::size_t i = 0; i < found.size (); ++i)
     {
       // The 64x128 window holds a person about 96 pixels tall in its middle: report the
@@ -206,6 +242,7 @@ PeopleDetector::detect (const cv::Mat &image, double threshold) const
                                    static_cast<int> (std::lround (side)), static_cast<int> (std::lround (side))),
                          i < weights.size () ? weights[i] : 0.0});
     }
+    sortByScore (people);
     return people;
   }
   std::vector<dlib::rect_detection> detections;
@@ -227,6 +264,7 @@ PeopleDetector::detect (const cv::Mat &image, double threshold) const
                     static_cast<int> (std::lround (box.width * scale)), static_cast<int> (std::lround (box.height * scale)));
     people.push_back ({box, d.detection_confidence});
   }
+  sortByScore (people);
   return people;
 }
 

@@ -3,6 +3,7 @@
 #include <pcl/common/io.h>
 
 #include <algorithm>
+#include <cctype>
 #include <charconv>
 #include <cmath>
 #include <cstdint>
@@ -171,14 +172,15 @@ constexpr PcdType kPcdTypes[] = {
     {'F', 4, pcl::PCLPointField::FLOAT32}, {'F', 8, pcl::PCLPointField::FLOAT64}, {'I', 1, pcl::PCLPointField::INT8},
     {'I', 2, pcl::PCLPointField::INT16},   {'I', 4, pcl::PCLPointField::INT32},   {'I', 8, pcl::PCLPointField::INT64},
     {'U', 1, pcl::PCLPointField::UINT8},   {'U', 2, pcl::PCLPointField::UINT16},  {'U', 4, pcl::PCLPointField::UINT32},
-    {'U', 8, pcl::PCLPointField::UINT64}};
+    {'U', 8, pcl::PCLPointField::UINT64}, {'B', 1, pcl::PCLPointField::BOOL}};
 
 /** The datatype of a TYPE and SIZE, 0 for a pair PCD does not have. */
 std::uint8_t
 fieldType (std::string_view type, std::uint64_t size)
 {
+  // PCL upper-cases the letter before reading it.
   for (const PcdType &t : kPcdTypes)
-    if (type.size () == 1 && type[0] == t.type && size == t.size)
+    if (type.size () == 1 && std::toupper (static_cast<unsigned char> (type[0])) == t.type && size == t.size)
       return t.datatype;
   return 0;
 }
@@ -263,8 +265,9 @@ parseValue (std::string_view token, std::uint8_t *slot)
     if (ec == std::errc::result_out_of_range)
     {
       // Too small for T is read as PCL reads it (a denormal or zero); too large is refused.
-      const long double wide = std::strtold (std::string (token).c_str (), nullptr);
-      if (!(std::fabs (wide) < 1.0L))
+      long double wide = 0.0L;
+      const auto [wide_end, wide_ec] = std::from_chars (token.data (), token.data () + token.size (), wide);
+      if (wide_ec != std::errc () || wide_end != token.data () + token.size () || !(std::fabs (wide) < 1.0L))
         return false;
       value = static_cast<T> (wide);
       std::memcpy (slot, &value, sizeof (T));
@@ -308,6 +311,7 @@ parseField (std::uint8_t datatype, std::string_view token, std::uint8_t *slot)
   case pcl::PCLPointField::UINT16: return parseNarrowed<std::uint16_t> (token, slot);
   case pcl::PCLPointField::UINT32: return parseNarrowed<std::uint32_t> (token, slot);
   case pcl::PCLPointField::UINT64: return parseValue<std::uint64_t> (token, slot);
+  case pcl::PCLPointField::BOOL: return parseNarrowed<std::uint8_t> (token, slot);
   default: return false;
   }
 }
@@ -425,6 +429,10 @@ readCompressed (const std::string &path, std::ifstream &in, std::uint64_t availa
   if (expected > compressed * 88)
     fail (path, "compressed PCD data of " + std::to_string (compressed) + " bytes cannot hold the " +
                     std::to_string (expected) + " the header says (corrupted)");
+  // All literals is LZF's worst case: a run byte per 32 bytes.
+  if (compressed > expected + expected / 32 + 16)
+    fail (path, "compressed PCD data of " + std::to_string (compressed) + " bytes is more than LZF makes of the " +
+                    std::to_string (expected) + " the header says (corrupted)");
   cloud.data.resize (expected);
   std::vector<std::uint8_t> packed (compressed);
   if (!in.read (reinterpret_cast<char *> (packed.data ()), static_cast<std::streamsize> (compressed)))
@@ -449,7 +457,9 @@ readCompressed (const std::string &path, std::ifstream &in, std::uint64_t availa
   }
 }
 
-/** PCL's rule: a cloud is dense when none of its x, y, z values is NaN or infinite. */
+/** Dense when none of the x, y, z values is NaN or infinite (PCL's readers differ in
+  * detail: its binary reader looks at every float field, its ascii reader only at "nan"
+  * tokens; agex uses only x, y, z and treats every invalid point the same way). */
 bool
 isDense (const pcl::PCLPointCloud2 &cloud)
 {
@@ -529,6 +539,10 @@ readPcd (const std::string &path)
     if (available > header.points * values * 65 + kMaxHeaderBytes)
       fail (path, "PCD ascii data of " + std::to_string (available) + " bytes is far more than " +
                       std::to_string (header.points) + " points take (damaged POINTS line)");
+    // The text is read whole: keep it within the data limit too.
+    if (available > kMaxPcdDataBytes)
+      fail (path, "PCD ascii data of " + std::to_string (available) + " bytes is more than the " +
+                      std::to_string (kMaxPcdDataBytes) + " agex reads");
     std::string body (static_cast<std::size_t> (available), '\0');
     if (!in.read (body.data (), static_cast<std::streamsize> (available)))
       failTruncated (path, "ascii data could not be read");

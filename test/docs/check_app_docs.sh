@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# Every app has its page in doc/apps/, every page its app, and every option an app's
-# --help lists is named on its page (or in the shared-flags table of doc/apps/README.md).
+# Every app has its page in doc/apps/ and every option an app's --help lists is named on
+# its page (or in the shared-flags table of doc/apps/README.md); a page without a built app
+# is only noted (agex may be built without its 2D apps).
 # Usage: check_app_docs.sh BIN_DIR SOURCE_DIR
 set -u
 bin_dir=$1
@@ -45,7 +46,10 @@ for app in "${apps[@]}"; do
   for option in $options; do
     # The positional arguments (INPUT..., MODE) appear in --help under these names.
     case $option in help | input | mode) continue ;; esac
-    grep -q -e "--$option\b" "$page" "$doc_dir/README.md" $linked ||
+    # The whole option name (not a prefix of a longer one), on the page, a page it defers
+    # to, or in the shared-flags table of the index.
+    pattern="--$option([^a-z0-9-]|\$)"
+    grep -q -E -e "$pattern" "$page" $linked || grep '^|' "$doc_dir/README.md" | grep -q -E -e "$pattern" ||
       fail "$app --$option is not documented in $page"
   done
 done

@@ -49,7 +49,7 @@ public:
                                const PeopleDetectorTrainingParams &params, std::size_t *ignored = nullptr);
   /** OpenCV's pretrained people detector (64x128 window, INRIA people). Images are
     * resized by \p scale before detection: below 1 it is faster (about scale^2 of the
-    * time) and misses people shorter than about 96 / scale pixels.
+    * time) and misses people shorter than about 96 / scale pixels (the apps use 0.5).
     * \throws std::invalid_argument unless 0.05 < scale <= 4 */
   static PeopleDetector openCvDefault (double scale = 1.0);
   /** \throws std::runtime_error naming the file when it is missing or not a detector */
@@ -60,7 +60,8 @@ public:
   bool isOpenCvDefault () const;
   std::string description () const;
 
-  /** People in an image (grey or BGR); threshold shifts the SVM's decision value. */
+  /** People in an image (grey or BGR), highest score first; threshold shifts the SVM's
+    * decision value. */
   std::vector<PersonDetection> detect (const cv::Mat &image, double threshold = 0.0) const;
 
 private:

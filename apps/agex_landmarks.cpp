@@ -13,8 +13,8 @@
 #include <opencv2/videoio.hpp>
 
 #include <algorithm>
-#include <csignal>
 #include <chrono>
+#include <csignal>
 #include <iostream>
 
 namespace po = boost::program_options;
@@ -57,6 +57,7 @@ frameJson (const std::string &source, const FrameResult &result)
     people.push_back (agex::apps::landmarkedPersonJson (person));
   return {{"source", source}, {"people", people}, {"ms", {{"detect", result.detect_ms}, {"landmarks", result.landmarks_ms}}}};
 }
+
 /** Set by Ctrl-C: a camera runs until then, and what was seen is still written. */
 volatile std::sig_atomic_t interrupted = 0;
 

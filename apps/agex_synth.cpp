@@ -40,12 +40,13 @@ main (int argc, char **argv)
   bool force = false;
 
   po::options_description general (
-      "agex_synth --motion FILE... --frames N --sensor sr4000|kinect --seed S --output DIR [options]\n"
+      "agex_synth --motion FILE... --frames N --sensor sr4000|kinect|bonn --seed S --output DIR [options]\n"
       "Renders labelled depth frames of people posed by BVH motion capture and writes an agex dataset");
   general.add_options () ("help,h", "show this help")
     ("motion", po::value (&options.motion_files)->multitoken (), "BVH motion files (CMU skeletons)")
     ("frames", po::value (&frames), "number of frames to render")
-    ("sensor", po::value (&sensor)->default_value (sensor), "sensor model: sr4000 (144x176 time of flight) or kinect (640x480)")
+    ("sensor", po::value (&sensor)->default_value (sensor), "sensor model: sr4000 (144x176 time of flight), kinect (640x480) or bonn (kinect in the Bonn frames' 8-bit "
+     "depth steps and 144x176 portrait view)")
     ("seed", po::value (&options.seed)->default_value (options.seed), "random seed; the same seed gives the same bytes")
     ("output", po::value (&output), "dataset directory to write")
     ("force", po::bool_switch (&force), "replace an existing output directory")
@@ -55,7 +56,10 @@ main (int argc, char **argv)
     ("min-distance", po::value (&options.min_distance)->default_value (options.min_distance, "1.5"), "camera to body, metres")
     ("max-distance", po::value (&options.max_distance)->default_value (options.max_distance, "3.5"), "camera to body, metres")
     ("min-height", po::value (&options.min_height)->default_value (options.min_height, "0.8"), "camera above the floor, metres")
-    ("max-height", po::value (&options.max_height)->default_value (options.max_height, "1.6"), "camera above the floor, metres");
+    ("max-height", po::value (&options.max_height)->default_value (options.max_height, "1.6"), "camera above the floor, metres")
+    ("body-mesh", po::value (&options.body_mesh),
+     "MakeHuman directory (base.obj, default.mhskel, default_weights.mhw, e.g. ../shared/data/makehuman): skinned mesh "
+     "bodies instead of capsules");
   po::positional_options_description positional;
 
   try
@@ -69,9 +73,12 @@ main (int argc, char **argv)
     if (output.empty ())
       throw std::runtime_error ("no --output directory given");
     if (!agex::parseSynthSensor (sensor, options.sensor))
-      throw std::runtime_error ("unknown --sensor '" + sensor + "' (expected sr4000 or kinect)");
+      throw std::runtime_error ("unknown --sensor '" + sensor + "' (expected sr4000, kinect or bonn)");
     options.bvh_scale = parseBvhScale (scale);
-    agex::checkOutputIsNotInput (output, options.motion_files);
+    std::vector<std::string> inputs = options.motion_files;
+    if (!options.body_mesh.empty ())
+      inputs.push_back (options.body_mesh);
+    agex::checkOutputIsNotInput (output, inputs);
     std::error_code ec;
     if (!force && std::filesystem::exists (output, ec))
       throw std::runtime_error (output + ": already exists; pass --force to replace it");

@@ -8,6 +8,8 @@
 
 #include <agex/common/bvh.h>
 #include <agex/common/dataset.h>
+#include <agex/common/human_mesh.h>
+#include <agex/common/synth_mesh.h>
 #include <agex/common/synthetic_scene.h>
 
 #include <fstream>
@@ -96,18 +98,25 @@ const std::vector<std::string> kMocap = {"cmu_131_01.bvh", "cmu_131_02.bvh", "cm
 
 #define AGEX_REQUIRE_MOCAP(path) AGEX_REQUIRE_SHARED_FILE (path, "the CMU motion capture (../shared/data/mocap)")
 
-/** Generators shared by the rendering tests (loading the clips costs ~0.1 s). */
+#define AGEX_REQUIRE_MAKEHUMAN()                                                                          \
+  AGEX_REQUIRE_SHARED_FILE (sharedData ("makehuman/default_weights.mhw"),                                   \
+                            "the MakeHuman body mesh (../shared/data/makehuman)")
+
+/** Generators shared by the rendering tests (loading the clips costs ~0.1 s, the mesh
+  * and its floor placement ~1 s); mesh: MakeHuman bodies instead of capsules. */
 const agex::SynthGenerator &
-generator (agex::SynthSensor sensor)
+generator (agex::SynthSensor sensor, bool mesh = false)
 {
-  static std::map<int, std::unique_ptr<agex::SynthGenerator>> cache;
-  auto &g = cache[static_cast<int> (sensor)];
+  static std::map<std::pair<int, bool>, std::unique_ptr<agex::SynthGenerator>> cache;
+  auto &g = cache[{static_cast<int> (sensor), mesh}];
   if (!g)
   {
     agex::SynthOptions options;
     options.motion_files = {sharedData ("mocap/cmu_131_01.bvh"), sharedData ("mocap/cmu_02_01.bvh")};
     options.sensor = sensor;
     options.seed = 11;
+    if (mesh)
+      options.body_mesh = sharedData ("makehuman");
     g = std::make_unique<agex::SynthGenerator> (options);
   }
   return *g;
@@ -320,18 +329,30 @@ TEST (SynthRng, DeterministicUniformAndNormal)
 // ---------------------------------------------------------------------------
 // Rendering and labels
 
-class SynthSensors : public ::testing::TestWithParam<agex::SynthSensor>
+/** A sensor model and a body: capsules (false) or the MakeHuman mesh (true). */
+class SynthSensors : public ::testing::TestWithParam<std::tuple<agex::SynthSensor, bool>>
 {
+protected:
+  agex::SynthSensor sensorKind () const { return std::get<0> (GetParam ()); }
+  bool mesh () const { return std::get<1> (GetParam ()); }
 };
+
+#define AGEX_REQUIRE_BODY()  \
+  do                         \
+  {                          \
+    if (mesh ())             \
+      AGEX_REQUIRE_MAKEHUMAN (); \
+  } while (0)
 
 TEST_P (SynthSensors, LabelsProjectOntoTheRenderedBody)
 {
   AGEX_REQUIRE_MOCAP (sharedData ("mocap/cmu_131_01.bvh"));
   AGEX_REQUIRE_MOCAP (sharedData ("mocap/cmu_02_01.bvh"));
-  const agex::SynthGenerator &gen = generator (GetParam ());
+  AGEX_REQUIRE_BODY ();
+  const agex::SynthGenerator &gen = generator (sensorKind (), mesh ());
   const agex::SensorModel &sensor = gen.sensor ();
   const agex::CameraIntrinsics &k = sensor.intrinsics;
-  const int frames = GetParam () == agex::SynthSensor::Kinect ? 6 : 16;
+  const int frames = sensorKind () == agex::SynthSensor::Kinect ? 6 : 16;
   const int win = agex::labelWindow (sensor);
   int labels = 0, visible = 0;
   for (int f = 0; f < frames; ++f)
@@ -399,7 +420,8 @@ TEST_P (SynthSensors, RendersAPersonInARoom)
 {
   AGEX_REQUIRE_MOCAP (sharedData ("mocap/cmu_131_01.bvh"));
   AGEX_REQUIRE_MOCAP (sharedData ("mocap/cmu_02_01.bvh"));
-  const agex::SynthGenerator &gen = generator (GetParam ());
+  AGEX_REQUIRE_BODY ();
+  const agex::SynthGenerator &gen = generator (sensorKind (), mesh ());
   std::set<std::string> sequences;
   for (int f = 0; f < 6; ++f)
   {
@@ -414,7 +436,8 @@ TEST_P (SynthSensors, RendersAPersonInARoom)
     }
     EXPECT_GT (person, frame.object.size () / 50) << "frame " << f;
     EXPECT_GT (floor, 0u) << "frame " << f;
-    EXPECT_GT (valid, frame.object.size () / 4) << "frame " << f;
+    // The bonn model keeps 255 depth steps (4.08 m), so far walls drop out as in the real frames.
+    EXPECT_GT (valid, frame.object.size () / (sensorKind () == agex::SynthSensor::Bonn ? 8 : 4)) << "frame " << f;
     // Organized, camera frame: x = (u - cx) z / fx.
     const agex::CameraIntrinsics &k = gen.sensor ().intrinsics;
     for (int v = 0; v < gen.sensor ().height; v += 7)
@@ -423,18 +446,62 @@ TEST_P (SynthSensors, RendersAPersonInARoom)
         const pcl::PointXYZ &p = frame.cloud (u, v);
         if (!isFinite (p))
           continue;
-        EXPECT_NEAR (p.x, (u - k.cx) * p.z / k.fx, 1e-4);
-        EXPECT_NEAR (p.y, (v - k.cy) * p.z / k.fy, 1e-4);
+        // The bonn view keeps each point of its nearest kinect pixel: up to half a
+        // kinect pixel off the view pixel's own ray.
+        const double off = sensorKind () == agex::SynthSensor::Bonn ? 0.55 * p.z / 525.0 : 1e-4;
+        EXPECT_NEAR (p.x, (u - k.cx) * p.z / k.fx, off);
+        EXPECT_NEAR (p.y, (v - k.cy) * p.z / k.fy, off);
         EXPECT_GT (p.z, 0.09f);
       }
   }
   EXPECT_EQ (sequences.size (), 2u) << "frames come from both clips";
 }
 
-INSTANTIATE_TEST_SUITE_P (Synth, SynthSensors, ::testing::Values (agex::SynthSensor::Sr4000, agex::SynthSensor::Kinect),
-                          [] (const ::testing::TestParamInfo<agex::SynthSensor> &info) {
-                            return std::string (agex::synthSensorName (info.param));
+INSTANTIATE_TEST_SUITE_P (Synth, SynthSensors,
+                          ::testing::Combine (::testing::Values (agex::SynthSensor::Sr4000, agex::SynthSensor::Kinect,
+                                                                 agex::SynthSensor::Bonn),
+                                              ::testing::Bool ()),
+                          [] (const ::testing::TestParamInfo<std::tuple<agex::SynthSensor, bool>> &info) {
+                            return std::string (agex::synthSensorName (std::get<0> (info.param))) +
+                                   (std::get<1> (info.param) ? "_mesh" : "_capsules");
                           });
+
+TEST (SynthBonn, EightBitDepthStepsInThePortraitView)
+{
+  AGEX_REQUIRE_MOCAP (sharedData ("mocap/cmu_131_01.bvh"));
+  AGEX_REQUIRE_MOCAP (sharedData ("mocap/cmu_02_01.bvh"));
+  const agex::SynthGenerator &gen = generator (agex::SynthSensor::Bonn);
+  // The view and intrinsics agex_convert bonn writes for the real frames.
+  const agex::SensorModel &sensor = gen.sensor ();
+  EXPECT_EQ (sensor.width, 144);
+  EXPECT_EQ (sensor.height, 176);
+  EXPECT_DOUBLE_EQ (sensor.intrinsics.fx, 210.0);
+  EXPECT_DOUBLE_EQ (sensor.intrinsics.cx, 71.5);
+  EXPECT_DOUBLE_EQ (sensor.intrinsics.cy, 87.5);
+  EXPECT_EQ (gen.datasetInfo ().sensor, "bonn");
+  std::size_t valid = 0;
+  std::set<long> levels;
+  for (int f = 0; f < 3; ++f)
+  {
+    const agex::SynthFrame frame = gen.render (static_cast<std::uint64_t> (f));
+    ASSERT_EQ (frame.cloud.width, 144u);
+    ASSERT_EQ (frame.cloud.height, 176u);
+    ASSERT_EQ (frame.object.size (), frame.cloud.size ());
+    for (const auto &p : frame.cloud.points)
+    {
+      if (!isFinite (p))
+        continue;
+      ++valid;
+      const double level = p.z / agex::kBonnDepthStep;
+      ASSERT_NEAR (level, std::round (level), 1e-3) << p.z;
+      ASSERT_GE (level, 0.5);
+      ASSERT_LE (level, 255.5);
+      levels.insert (std::lround (level));
+    }
+  }
+  EXPECT_GT (valid, 3u * 144 * 176 / 4);
+  EXPECT_GT (levels.size (), 40u) << "a room's worth of depths";
+}
 
 TEST (SynthSr4000, MixedPixelsAtSilhouettesAndNoiseGrowingWithDepth)
 {
@@ -761,5 +828,268 @@ TEST (SynthDataset, SameSeedSameBytesDifferentSeedDifferent)
     EXPECT_NE (std::string (e.what ()).find ("already exists"), std::string::npos) << e.what ();
   }
   EXPECT_TRUE (run (5, "a", true) == b);
+}
+// ---------------------------------------------------------------------------
+// Triangle meshes and the MakeHuman body
+
+/** Nearest hit over every triangle, without the hierarchy. */
+double
+bruteForceHit (const agex::SynthMesh &mesh, const Eigen::Vector3d &o, const Eigen::Vector3d &d)
+{
+  double best = -1.0;
+  for (const auto &t : mesh.triangles ())
+  {
+    const Eigen::Vector3d &a = mesh.vertices ()[t[0]];
+    const Eigen::Vector3d e1 = mesh.vertices ()[t[1]] - a, e2 = mesh.vertices ()[t[2]] - a;
+    Eigen::Matrix3d m;
+    m << -d, e1, e2;
+    if (std::abs (m.determinant ()) < 1e-15)
+      continue;
+    const Eigen::Vector3d x = m.colPivHouseholderQr ().solve (o - a);  // (t, u, v)
+    if (x[0] > 1e-9 && x[1] >= 0 && x[2] >= 0 && x[1] + x[2] <= 1 && (best < 0 || x[0] < best))
+      best = x[0];
+  }
+  return best;
+}
+
+/** A UV sphere of radius r around c. */
+agex::SynthMesh
+sphereMesh (const Eigen::Vector3d &c, double r, int rings, int segments)
+{
+  std::vector<Eigen::Vector3d> v;
+  std::vector<Eigen::Vector3i> t;
+  for (int i = 0; i <= rings; ++i)
+    for (int j = 0; j < segments; ++j)
+    {
+      const double theta = M_PI * i / rings, phi = 2 * M_PI * j / segments;
+      v.push_back (c + r * Eigen::Vector3d (std::sin (theta) * std::cos (phi), std::cos (theta), std::sin (theta) * std::sin (phi)));
+    }
+  for (int i = 0; i < rings; ++i)
+    for (int j = 0; j < segments; ++j)
+    {
+      const int a = i * segments + j, b = i * segments + (j + 1) % segments;
+      t.emplace_back (a, b, a + segments);
+      t.emplace_back (b, b + segments, a + segments);
+    }
+  return agex::SynthMesh (v, t);
+}
+
+TEST (SynthMesh, OneTriangleHitNormalAndDistance)
+{
+  const agex::SynthMesh tri ({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}, {{0, 1, 2}});
+  Eigen::Vector3d n;
+  EXPECT_NEAR (tri.intersect ({0.2, 0.2, 1.0}, {0, 0, -1}, 0.0, &n), 1.0, 1e-12);
+  EXPECT_NEAR (n.z (), 1.0, 1e-12) << "the normal faces the ray";
+  EXPECT_NEAR (tri.intersect ({0.2, 0.2, -2.0}, {0, 0, 1}, 0.0, &n), 2.0, 1e-12);
+  EXPECT_NEAR (n.z (), -1.0, 1e-12);
+  EXPECT_LT (tri.intersect ({0.8, 0.8, 1.0}, {0, 0, -1}, 0.0, &n), 0.0) << "outside the triangle";
+  EXPECT_LT (tri.intersect ({0.2, 0.2, 1.0}, {0, 0, 1}, 0.0, &n), 0.0) << "behind the ray";
+  EXPECT_LT (tri.intersect ({0.2, 0.2, 1.0}, {0, 0, -1}, 1.5, &n), 0.0) << "before t_min";
+  EXPECT_NEAR (tri.distance ({0.2, 0.2, 0.3}), 0.3, 1e-12);
+  EXPECT_NEAR (tri.distance ({2, 0, 0}), 1.0, 1e-12);
+  EXPECT_NEAR (tri.distance ({-1, -1, 0}), std::sqrt (2.0), 1e-12);
+  EXPECT_NEAR (tri.distance ({1, 1, 0}), std::sqrt (0.5), 1e-12);
+  EXPECT_THROW (agex::SynthMesh ({{0, 0, 0}}, {{0, 1, 2}}), std::invalid_argument);
+  const agex::SynthMesh empty ({}, {});
+  EXPECT_LT (empty.intersect ({0, 0, 0}, {0, 0, 1}, 0.0, nullptr), 0.0);
+}
+
+TEST (SynthMesh, HierarchyFindsTheSameHitsAsEveryTriangle)
+{
+  const Eigen::Vector3d c (0.1, -0.2, 3.0);
+  const agex::SynthMesh sphere = sphereMesh (c, 0.5, 24, 40);
+  ASSERT_GT (sphere.triangles ().size (), 1000u);
+  agex::SynthRng rng (3);
+  int hits = 0;
+  for (int i = 0; i < 400; ++i)
+  {
+    const Eigen::Vector3d o (rng.uniform (-0.3, 0.3), rng.uniform (-0.3, 0.3), 0.0);
+    const Eigen::Vector3d aim = c + Eigen::Vector3d (rng.uniform (-0.6, 0.6), rng.uniform (-0.6, 0.6), 0.0);
+    const Eigen::Vector3d d = (aim - o).normalized ();
+    Eigen::Vector3d n;
+    const double t = sphere.intersect (o, d, 0.0, &n), expected = bruteForceHit (sphere, o, d);
+    ASSERT_EQ (t < 0, expected < 0) << "ray " << i;
+    if (t < 0)
+      continue;
+    ++hits;
+    EXPECT_NEAR (t, expected, 1e-9) << "ray " << i;
+    const Eigen::Vector3d p = o + t * d;
+    EXPECT_NEAR ((p - c).norm (), 0.5, 0.01) << "on the sphere, up to the tessellation";
+    EXPECT_LT (n.dot (d), 0.0) << "the normal faces the ray";
+    EXPECT_LT (sphere.distance (p), 1e-9);
+    EXPECT_NEAR (sphere.distance (c + (p - c).normalized ()), 0.5, 0.01);
+  }
+  EXPECT_GT (hits, 100);
+  // Placed in a scene as a primitive: the same hits after a rigid transform.
+  Eigen::Isometry3d move = Eigen::Isometry3d::Identity ();
+  move.rotate (Eigen::AngleAxisd (0.7, Eigen::Vector3d (1, 2, 3).normalized ()));
+  move.pretranslate (Eigen::Vector3d (0.4, -1.0, 2.0));
+  const agex::SynthPrimitive here = agex::SynthPrimitive::triangleMesh (
+      std::make_shared<const agex::SynthMesh> (sphere), agex::SynthObject::Person);
+  const agex::SynthPrimitive there = here.transformed (move);
+  const Eigen::Vector3d o (0, 0, 0), d = (c - Eigen::Vector3d (0.1, 0.05, 0.0)).normalized ();
+  Eigen::Vector3d n_here, n_there;
+  const double t_here = here.intersect (o, d, 0.0, &n_here);
+  ASSERT_GT (t_here, 0.0);
+  EXPECT_NEAR (there.intersect (move * o, move.linear () * d, 0.0, &n_there), t_here, 1e-9);
+  EXPECT_LT ((n_there - move.linear () * n_here).norm (), 1e-9);
+  Eigen::Vector3d centre_here, centre_there;
+  double r_here, r_there;
+  ASSERT_TRUE (here.boundingSphere (centre_here, r_here));
+  ASSERT_TRUE (there.boundingSphere (centre_there, r_there));
+  EXPECT_LT ((centre_there - move * centre_here).norm (), 1e-9);
+  EXPECT_NEAR (there.distance (move * (c + Eigen::Vector3d (0, 0, -1))), 0.5, 0.01);
+}
+
+TEST (HumanMesh, LoadsTheMakeHumanBody)
+{
+  AGEX_REQUIRE_MAKEHUMAN ();
+  const agex::HumanMesh mesh = agex::HumanMesh::load (sharedData ("makehuman"));
+  EXPECT_EQ (mesh.vertices ().size (), 13380u);   // group body of base.obj
+  EXPECT_EQ (mesh.triangles ().size (), 2 * 13378u);  // its quads, split
+  EXPECT_EQ (mesh.bones ().size (), 163u);
+  EXPECT_NEAR (mesh.height (), 1.67, 0.05);
+  for (std::size_t b = 0; b < mesh.bones ().size (); ++b)
+    EXPECT_LT (mesh.bones ()[b].parent, static_cast<int> (b)) << "parents come first";
+  std::vector<int> per_part (agex::HumanMesh::kParts, 0);
+  for (std::size_t v = 0; v < mesh.vertices ().size (); ++v)
+  {
+    double sum = 0;
+    for (const auto &i : mesh.influences ()[v])
+      sum += i.weight;
+    ASSERT_NEAR (sum, 1.0, 1e-9) << "vertex " << v;
+    ++per_part[mesh.parts ()[v]];
+  }
+  for (int p = 0; p < agex::HumanMesh::kParts; ++p)
+    EXPECT_GT (per_part[p], 200) << "part " << p;
+  EXPECT_EQ (per_part[agex::HumanMesh::LeftHand], per_part[agex::HumanMesh::RightHand]) << "symmetric weights";
+  // Tips: the head's is the highest point of the body; hands on their own side (+X is
+  // the body's left), below the shoulders in MakeHuman's A pose; toes in front.
+  const auto &tips = mesh.tipVertices ();
+  double top = -1e9;
+  for (const auto &v : mesh.vertices ())
+    top = std::max (top, v.y ());
+  EXPECT_NEAR (mesh.vertices ()[tips[agex::HumanMesh::Head]].y (), top, 0.01);
+  const Eigen::Vector3d left_hand = mesh.vertices ()[tips[agex::HumanMesh::LeftHand]],
+                        right_hand = mesh.vertices ()[tips[agex::HumanMesh::RightHand]];
+  EXPECT_GT (left_hand.x (), 0.4);
+  EXPECT_NEAR (right_hand.x (), -left_hand.x (), 1e-6);
+  EXPECT_LT (left_hand.y (), 0.3);
+  for (const auto part : {agex::HumanMesh::LeftFoot, agex::HumanMesh::RightFoot})
+  {
+    const Eigen::Vector3d toe = mesh.vertices ()[tips[part]];
+    EXPECT_GT (toe.z (), 0.15);
+    EXPECT_LT (toe.y (), -0.7);
+  }
+}
+
+TEST (HumanMesh, BadFilesNameTheFile)
+{
+  TempDir dir;
+  auto write = [&] (const std::string &name, const std::string &text) { std::ofstream (dir.file (name)) << text; };
+  auto error = [&] () -> std::string {
+    try
+    {
+      agex::HumanMesh::load (dir.path ().string ());
+    }
+    catch (const agex::HumanMeshError &e)
+    {
+      return e.what ();
+    }
+    return "(no error)";
+  };
+  EXPECT_NE (error ().find ("base.obj: cannot open"), std::string::npos) << error ();
+  write ("base.obj", "v 0 0 0\nv 1 0 0\ng body\nf 1 2 7\n");
+  EXPECT_NE (error ().find ("base.obj:4: face corner 7 names no vertex"), std::string::npos) << error ();
+  write ("base.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\ng helper-tights\nf 1 2 3\n");
+  EXPECT_NE (error ().find ("no faces in group 'body'"), std::string::npos) << error ();
+  write ("base.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\ng body\nf 1/1 2/2 3/3\n");
+  EXPECT_NE (error ().find ("default.mhskel: cannot open"), std::string::npos) << error ();
+  write ("default.mhskel", "{\"bones\": {");
+  write ("default_weights.mhw", "{\"weights\": {}}");
+  EXPECT_NE (error ().find ("default.mhskel: not valid JSON"), std::string::npos) << error ();
+  write ("default.mhskel",
+         "{\"joints\": {\"a\": [0], \"b\": [9]}, \"bones\": {\"root\": {\"head\": \"a\", \"tail\": \"b\", \"parent\": null}}}");
+  EXPECT_NE (error ().find ("joint 'b' names vertex 9"), std::string::npos) << error ();
+  write ("default.mhskel",
+         "{\"joints\": {\"a\": [0], \"b\": [1]}, \"bones\": {\"root\": {\"head\": \"a\", \"tail\": \"b\", \"parent\": \"x\"}}}");
+  EXPECT_NE (error ().find ("bone 'root' has a parent that is missing"), std::string::npos) << error ();
+  write ("default.mhskel",
+         "{\"joints\": {\"a\": [0], \"b\": [1]}, \"bones\": {\"root\": {\"head\": \"a\", \"tail\": \"b\", \"parent\": null}}}");
+  EXPECT_NE (error ().find ("default.mhskel: the skeleton has no bone 'head'"), std::string::npos) << error ();
+}
+
+TEST (HumanMesh, PosedBodyFollowsTheMotionCapture)
+{
+  AGEX_REQUIRE_MAKEHUMAN ();
+  AGEX_REQUIRE_MOCAP (sharedData ("mocap/cmu_05_06.bvh"));
+  const agex::HumanMesh mesh = agex::HumanMesh::load (sharedData ("makehuman"));
+  const agex::MotionClip clip = agex::MotionClip::load (sharedData ("mocap/cmu_05_06.bvh"));
+  const agex::SkeletonMap &m = clip.map;
+  agex::BodyParams params;
+  const double height = agex::restStandingHeight (clip);
+  auto angle = [] (const Eigen::Vector3d &a, const Eigen::Vector3d &b) {
+    return std::acos (std::clamp (a.normalized ().dot (b.normalized ()), -1.0, 1.0)) * 180.0 / M_PI;
+  };
+  for (const int frame : {0, 150, 300, 450, 600, 750})
+  {
+    const agex::BodyModel body = agex::buildMeshBody (clip, frame, params, mesh);
+    std::vector<Eigen::Isometry3d> g;
+    clip.motion.pose (frame, clip.scale, g);
+    auto P = [&] (int j) { return g[static_cast<std::size_t> (j)].translation (); };
+    const std::string where = "frame " + std::to_string (frame);
+    ASSERT_EQ (body.primitives.size (), 6u);
+    EXPECT_NEAR (body.highest - body.lowest, height, 0.35 * height) << where;
+    // Every segment points where the skeleton's does.
+    const std::vector<Eigen::Vector3d> heads = agex::meshBoneHeads (clip, frame, params, mesh);
+    auto H = [&] (const std::string &bone) { return heads[static_cast<std::size_t> (mesh.bone (bone))]; };
+    for (int side = 0; side < 2; ++side)
+    {
+      const std::string s = side == 0 ? ".L" : ".R", at = where + " side " + std::to_string (side);
+      EXPECT_LT (angle (H ("lowerarm01" + s) - H ("upperarm01" + s), P (m.elbow[side]) - P (m.shoulder[side])), 1.0) << at;
+      EXPECT_LT (angle (H ("wrist" + s) - H ("lowerarm01" + s), P (m.wrist[side]) - P (m.elbow[side])), 1.0) << at;
+      EXPECT_LT (angle (H ("lowerleg01" + s) - H ("upperleg01" + s), P (m.knee[side]) - P (m.hip[side])), 1.0) << at;
+      EXPECT_LT (angle (H ("foot" + s) - H ("lowerleg01" + s), P (m.ankle[side]) - P (m.knee[side])), 1.0) << at;
+      EXPECT_EQ (H ("wrist" + s), body.base[1 + side]) << "the hand's base is the wrist";
+      EXPECT_EQ (H ("foot" + s), body.base[3 + side]) << "the foot's base is the ankle";
+      // The hand's tip lies beyond its wrist, away from the elbow.
+      EXPECT_GT ((body.tip[1 + side] - body.base[1 + side]).dot (P (m.wrist[side]) - P (m.elbow[side])), 0.0) << at;
+    }
+    EXPECT_LT (angle (H ("head") - H ("neck01"), P (m.head) - P (m.neck)), 1.0) << where;
+    // The root joint carries the hips: the mesh's hip centre is on it.
+    EXPECT_LT ((0.5 * (H ("upperleg01.L") + H ("upperleg01.R")) - P (m.root)).norm (), 1e-9) << where;
+    // Each tip lies on its own part's mesh.
+    for (int i = 0; i < 5; ++i)
+      EXPECT_LT (body.primitives[static_cast<std::size_t> (body.tip_primitives[i][0])].distance (body.tip[i]), 1e-9);
+  }
+}
+
+TEST (HumanMesh, MeshFramesAreDeterministic)
+{
+  AGEX_REQUIRE_MAKEHUMAN ();
+  AGEX_REQUIRE_MOCAP (sharedData ("mocap/cmu_02_01.bvh"));
+  auto render = [] (std::uint64_t seed) {
+    agex::SynthOptions options;
+    options.motion_files = {sharedData ("mocap/cmu_02_01.bvh")};
+    options.body_mesh = sharedData ("makehuman");
+    options.seed = seed;
+    options.subjects = 2;
+    const agex::SynthGenerator gen (options);
+    EXPECT_NE (gen.datasetInfo ().provenance.find ("MakeHuman mesh bodies"), std::string::npos);
+    return gen.render (3);
+  };
+  const agex::SynthFrame a = render (4), b = render (4), c = render (5);
+  ASSERT_EQ (a.cloud.size (), b.cloud.size ());
+  bool differs = false;
+  for (std::size_t i = 0; i < a.cloud.size (); ++i)
+  {
+    const auto &p = a.cloud.points[i], &q = b.cloud.points[i], &r = c.cloud.points[i];
+    ASSERT_EQ (std::memcmp (&p, &q, sizeof p), 0) << "pixel " << i;
+    differs = differs || std::memcmp (&p, &r, sizeof p) != 0;
+  }
+  EXPECT_TRUE (differs);
+  ASSERT_EQ (a.labels.size (), 5u);
+  for (std::size_t j = 0; j < 5; ++j)
+    EXPECT_EQ (a.labels[j].tip, b.labels[j].tip);
 }
 }  // namespace

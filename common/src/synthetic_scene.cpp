@@ -1,5 +1,7 @@
 #include <agex/common/synthetic_scene.h>
 
+#include <agex/common/human_mesh.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -124,7 +126,13 @@ SynthRng::normal ()
 const char *
 synthSensorName (SynthSensor sensor)
 {
-  return sensor == SynthSensor::Kinect ? "kinect" : "sr4000";
+  switch (sensor)
+  {
+    case SynthSensor::Sr4000: return "sr4000";
+    case SynthSensor::Kinect: return "kinect";
+    case SynthSensor::Bonn: return "bonn";
+  }
+  return "?";
 }
 
 bool
@@ -134,6 +142,8 @@ parseSynthSensor (const std::string &name, SynthSensor &sensor)
     sensor = SynthSensor::Sr4000;
   else if (name == "kinect")
     sensor = SynthSensor::Kinect;
+  else if (name == "bonn")
+    sensor = SynthSensor::Bonn;
   else
     return false;
   return true;
@@ -142,6 +152,20 @@ parseSynthSensor (const std::string &name, SynthSensor &sensor)
 SensorModel
 sensorModel (SynthSensor sensor)
 {
+  if (sensor == SynthSensor::Bonn)
+  {
+    // The portrait view of a kinect frame, with the intrinsics agex_convert bonn writes.
+    SensorModel m = sensorModel (SynthSensor::Kinect);
+    const FrameView view = bonnPortraitView ();
+    m.sensor = sensor;
+    m.width = view.outputWidth ();
+    m.height = view.outputHeight ();
+    m.intrinsics.fx *= view.scale;
+    m.intrinsics.fy *= view.scale;
+    m.intrinsics.cx = view.scale * (m.intrinsics.cx - view.x + 0.5) - 0.5;
+    m.intrinsics.cy = view.scale * (m.intrinsics.cy - view.y + 0.5) - 0.5;
+    return m;
+  }
   SensorModel m;
   m.sensor = sensor;
   if (sensor == SynthSensor::Sr4000)
@@ -166,6 +190,12 @@ sensorModel (SynthSensor sensor)
     m.max_range = 6.0;
   }
   return m;
+}
+
+SensorModel
+renderSensorModel (SynthSensor sensor)
+{
+  return sensorModel (sensor == SynthSensor::Bonn ? SynthSensor::Kinect : sensor);
 }
 
 // ---------------------------------------------------------------------------
@@ -216,6 +246,18 @@ SynthPrimitive::plane (const Eigen::Vector3d &normal, double offset, SynthObject
 }
 
 SynthPrimitive
+SynthPrimitive::triangleMesh (std::shared_ptr<const SynthMesh> mesh, SynthObject object)
+{
+  if (!mesh)
+    throw std::invalid_argument ("SynthPrimitive::triangleMesh: no mesh");
+  SynthPrimitive p;
+  p.shape = Shape::Mesh;
+  p.object = object;
+  p.mesh = std::move (mesh);
+  return p;
+}
+
+SynthPrimitive
 SynthPrimitive::transformed (const Eigen::Isometry3d &t) const
 {
   SynthPrimitive p = *this;
@@ -245,6 +287,10 @@ SynthPrimitive::boundingSphere (Eigen::Vector3d &c, double &r) const
     case Shape::Box:
       c = centre;
       r = std::sqrt (axes.col (0).squaredNorm () + axes.col (1).squaredNorm () + axes.col (2).squaredNorm ());
+      return true;
+    case Shape::Mesh:
+      c = centre + axes * mesh->sphereCentre ();
+      r = mesh->sphereRadius ();
       return true;
     case Shape::Plane: return false;
   }
@@ -374,6 +420,14 @@ SynthPrimitive::intersect (const Eigen::Vector3d &o, const Eigen::Vector3d &d, d
         *n = denom < 0 ? normal : Eigen::Vector3d (-normal);
       return t;
     }
+    case Shape::Mesh:
+    {
+      // The placement is rigid, so t is the same in the mesh's own frame.
+      const double t = mesh->intersect (axes.transpose () * (o - centre), axes.transpose () * d, t_min, n);
+      if (t >= 0 && n)
+        *n = axes * *n;
+      return t;
+    }
   }
   return -1.0;
 }
@@ -412,6 +466,7 @@ SynthPrimitive::distance (const Eigen::Vector3d &p) const
       return outside.norm () + std::min (d.maxCoeff (), 0.0);
     }
     case Shape::Plane: return normal.dot (p) - offset;
+    case Shape::Mesh: return mesh->distance (axes.transpose () * (p - centre));
   }
   return kInf;
 }
@@ -1240,7 +1295,58 @@ makeLabels (const BodyModel &body, const SensorModel &sensor, SynthFrame &frame)
 // ---------------------------------------------------------------------------
 // The generator
 
-SynthGenerator::SynthGenerator (const SynthOptions &options) : options_ (options), sensor_ (sensorModel (options.sensor))
+namespace
+{
+/** A kinect frame made to look like the Bonn frames: depth in 8-bit steps of
+  * kBonnDepthStep (0 and beyond 255 steps: no measurement), each point kept on its
+  * pixel's ray, then the portrait view (nearest source pixel, as agex_convert bonn
+  * does). The ground truth follows the view, so labels are made in it. */
+void
+toBonnView (const SensorModel &kinect, const SensorModel &bonn, SynthFrame &frame)
+{
+  const CameraIntrinsics &k = kinect.intrinsics;
+  for (int v = 0; v < kinect.height; ++v)
+    for (int u = 0; u < kinect.width; ++u)
+    {
+      pcl::PointXYZ &p = frame.cloud (u, v);
+      if (!std::isfinite (p.z))
+        continue;
+      const long level = std::lround (p.z / kBonnDepthStep);
+      if (level < 1 || level > 255)
+      {
+        p.x = p.y = p.z = kNaN;
+        continue;
+      }
+      const double z = static_cast<double> (level) * kBonnDepthStep;
+      p.x = static_cast<float> ((u - k.cx) * z / k.fx);
+      p.y = static_cast<float> ((v - k.cy) * z / k.fy);
+      p.z = static_cast<float> (z);
+    }
+  const FrameView view = bonnPortraitView ();
+  pcl::PointCloud<pcl::PointXYZ> portrait;
+  applyView (frame.cloud, view, portrait);
+  frame.cloud = std::move (portrait);
+  auto resample = [&] (auto &values) {
+    auto source = values;
+    values.resize (static_cast<std::size_t> (bonn.width) * bonn.height);
+    for (int v = 0; v < bonn.height; ++v)
+      for (int u = 0; u < bonn.width; ++u)
+      {
+        const cv::Point s = view.sourcePixel (u, v);
+        values[static_cast<std::size_t> (v) * bonn.width + u] =
+            source[static_cast<std::size_t> (s.y) * kinect.width + s.x];
+      }
+  };
+  resample (frame.object);
+  resample (frame.primitive);
+  resample (frame.ideal_z);
+  resample (frame.sample_min_z);
+  resample (frame.sample_max_z);
+}
+}  // namespace
+
+SynthGenerator::SynthGenerator (const SynthOptions &options)
+  : options_ (options), sensor_ (sensorModel (options.sensor)), render_sensor_ (renderSensorModel (options.sensor))
 {
   if (options.motion_files.empty ())
     throw std::invalid_argument ("no motion files given");
@@ -1255,6 +1361,8 @@ SynthGenerator::SynthGenerator (const SynthOptions &options) : options_ (options
   SynthRng rng = SynthRng::forItem (options.seed, ~0ull);
   for (int s = 0; s < options.subjects; ++s)
     subjects_.push_back (BodyParams::random (rng));
+  if (!options.body_mesh.empty ())
+    mesh_ = std::make_shared<const HumanMesh> (HumanMesh::load (options.body_mesh));
   // The floor of a clip for a subject: the lowest the body gets over the whole clip.
   floor_.resize (clips_.size ());
   for (std::size_t c = 0; c < clips_.size (); ++c)
@@ -1262,9 +1370,18 @@ SynthGenerator::SynthGenerator (const SynthOptions &options) : options_ (options
     {
       double lowest = kInf;
       for (int f = 0; f < clips_[c].motion.frameCount (); ++f)
-        lowest = std::min (lowest, buildBody (clips_[c], f, params).lowest);
+        lowest = std::min (lowest, mesh_ ? meshBodyLowest (clips_[c], f, params, *mesh_)
+                                         : buildBody (clips_[c], f, params).lowest);
       floor_[c].push_back (lowest);
     }
+}
+
+BodyModel
+SynthGenerator::body (int clip, int clip_frame, int subject) const
+{
+  const MotionClip &c = clips_.at (static_cast<std::size_t> (clip));
+  const BodyParams &params = subjects_.at (static_cast<std::size_t> (subject));
+  return mesh_ ? buildMeshBody (c, clip_frame, params, *mesh_) : buildBody (c, clip_frame, params);
 }
 
 SynthFrame
@@ -1277,8 +1394,7 @@ SynthGenerator::render (std::uint64_t index) const
   frame.clip_frame = rng.index (clip.motion.frameCount ());
   frame.subject = rng.index (static_cast<int> (subjects_.size ()));
   frame.sequence = clip.sequence;
-  const BodyParams &params = subjects_[frame.subject];
-  const BodyModel body = buildBody (clip, frame.clip_frame, params);
+  const BodyModel body = this->body (frame.clip, frame.clip_frame, frame.subject);
   const double floor_y = floor_[frame.clip][frame.subject];
   const Eigen::Vector3d up = Eigen::Vector3d::UnitY ();
 
@@ -1420,7 +1536,9 @@ SynthGenerator::render (std::uint64_t index) const
   }
 
   const SynthScene scene = world.transformed (world_to_camera);
-  renderScene (scene, sensor_, rng, frame);
+  renderScene (scene, render_sensor_, rng, frame);
+  if (options_.sensor == SynthSensor::Bonn)
+    toBonnView (render_sensor_, sensor_, frame);
   makeLabels (body.transformed (world_to_camera), sensor_, frame);
   return frame;
 }
@@ -1438,7 +1556,8 @@ SynthGenerator::datasetInfo () const
   info.units = "m";
   std::ostringstream p;
   p << "agex_synth: synthetic " << info.sensor << " frames (" << sensor_.width << "x" << sensor_.height
-    << ") of capsule/ellipsoid bodies posed by motion capture; motion:";
+    << ") of " << (mesh_ ? "MakeHuman mesh bodies (" + options_.body_mesh + ")" : std::string ("capsule/ellipsoid bodies"))
+    << " posed by motion capture; motion:";
   for (const auto &clip : clips_)
     p << " " << clip.motion.path () << " (" << clip.motion.frameCount () << " frames, " << clip.scale << " m/unit"
       << (clip.scale_auto ? " auto" : "") << ")";

@@ -19,6 +19,7 @@
 #include <agex/common/bvh.h>
 #include <agex/common/dataset.h>
 #include <agex/common/frame_io.h>
+#include <agex/common/synth_mesh.h>
 
 #include <pcl/point_cloud.h>
 #include <pcl/point_types.h>
@@ -28,6 +29,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <random>
 #include <string>
 #include <vector>
@@ -67,15 +69,18 @@ private:
 enum class SynthSensor
 {
   Sr4000,
-  Kinect
+  Kinect,
+  Bonn  ///< the Bonn frames' look: kinect, 8-bit depth in 1.6 cm steps, their 144x176 portrait view
 };
 
-/** "sr4000" or "kinect". */
+/** "sr4000", "kinect" or "bonn". */
 const char *synthSensorName (SynthSensor sensor);
 /** Inverse of synthSensorName; false for an unknown name. */
 bool parseSynthSensor (const std::string &name, SynthSensor &sensor);
 
-/** The image a sensor model produces and its noise parameters (doc/synthetic.md). */
+/** The image a sensor model produces and its noise parameters (doc/synthetic.md). The
+  * bonn model's image is the 144x176 portrait view (bonnPortraitView) of a kinect
+  * frame; it is rendered with renderSensorModel(Bonn), the kinect model. */
 struct SensorModel
 {
   SynthSensor sensor = SynthSensor::Sr4000;
@@ -95,8 +100,13 @@ struct SensorModel
   double kinect_edge_drop_near = 0.2; ///< ... of a pixel beside one
 };
 
-/** The model of a sensor with its default parameters. */
+/** The model of a sensor with its default parameters: the frames it writes. */
 SensorModel sensorModel (SynthSensor sensor);
+/** The model a sensor's frames are rendered with (kinect for bonn, else sensorModel). */
+SensorModel renderSensorModel (SynthSensor sensor);
+
+/** Depth step of the Bonn frames: 8-bit grey levels of 0.016 m (../shared/README.md). */
+constexpr double kBonnDepthStep = 0.016;
 
 // ---------------------------------------------------------------------------
 // Scene primitives
@@ -118,7 +128,8 @@ struct SynthPrimitive
     Capsule,    ///< segment a-b, radius
     Ellipsoid,  ///< centre, axes (columns: orthogonal semi-axis vectors)
     Box,        ///< centre, axes (columns: orthogonal half-extent vectors)
-    Plane       ///< normal . x = offset (infinite)
+    Plane,      ///< normal . x = offset (infinite)
+    Mesh        ///< triangles of `mesh`, placed by the rotation `axes` and the translation `centre`
   };
   Shape shape = Shape::Capsule;
   SynthObject object = SynthObject::None;
@@ -130,11 +141,14 @@ struct SynthPrimitive
   Eigen::Matrix3d inverse = Eigen::Matrix3d::Identity ();  ///< axes^-1 (kept by the factories)
   Eigen::Vector3d normal = Eigen::Vector3d::UnitY ();
   double offset = 0.0;
+  std::shared_ptr<const SynthMesh> mesh;
 
   static SynthPrimitive capsule (const Eigen::Vector3d &a, const Eigen::Vector3d &b, double radius, SynthObject object);
   static SynthPrimitive ellipsoid (const Eigen::Vector3d &centre, const Eigen::Matrix3d &axes, SynthObject object);
   static SynthPrimitive box (const Eigen::Vector3d &centre, const Eigen::Matrix3d &axes, SynthObject object);
   static SynthPrimitive plane (const Eigen::Vector3d &normal, double offset, SynthObject object);
+  /** A triangle mesh in the scene's frame (identity placement). */
+  static SynthPrimitive triangleMesh (std::shared_ptr<const SynthMesh> mesh, SynthObject object);
 
   /** The same primitive after a rigid transform. */
   SynthPrimitive transformed (const Eigen::Isometry3d &transform) const;
@@ -145,7 +159,8 @@ struct SynthPrimitive
   double intersect (const Eigen::Vector3d &origin, const Eigen::Vector3d &direction, double t_min,
                     Eigen::Vector3d *normal) const;
   /** Approximate signed distance of p to the surface (exact for capsules, boxes and
-    * planes, first order for ellipsoids); negative inside. */
+    * planes, first order for ellipsoids); negative inside. Meshes give the unsigned
+    * distance. */
   double distance (const Eigen::Vector3d &p) const;
 };
 
@@ -233,6 +248,26 @@ struct BodyModel
 /** \brief Poses the body model on frame `frame` of a clip (-1 = rest pose). */
 BodyModel buildBody (const MotionClip &clip, int frame, const BodyParams &params);
 
+class HumanMesh;
+
+/** \brief Poses the MakeHuman mesh body on frame `frame` of a clip (-1 = rest pose):
+  * the mesh is scaled to the clip's rest height times params.height_scale, shaped by
+  * the other params, and each bone follows the motion capture segment it lies on
+  * (rotation of the segment's joint, then turned so the bone points where the segment
+  * does; doc/synthetic.md). Six mesh primitives: trunk, head, left and right hand,
+  * left and right foot; tips are mesh vertices (top of the head, middle finger tips,
+  * toe fronts), bases the neck, wrist and ankle joints. */
+BodyModel buildMeshBody (const MotionClip &clip, int frame, const BodyParams &params, const HumanMesh &mesh);
+
+/** Heads of the mesh's bones (indexed like mesh.bones()) posed as buildMeshBody poses
+  * them: the posed skeleton. */
+std::vector<Eigen::Vector3d> meshBoneHeads (const MotionClip &clip, int frame, const BodyParams &params,
+                                            const HumanMesh &mesh);
+
+/** Lowest point (Y) of the posed mesh body's feet and a sample of its other vertices:
+  * what the floor is placed by, without building the whole body. */
+double meshBodyLowest (const MotionClip &clip, int frame, const BodyParams &params, const HumanMesh &mesh);
+
 /** Height of the body model in the clip's rest pose (head top to sole), metres. */
 double restStandingHeight (const MotionClip &clip, const BodyParams &params = BodyParams ());
 
@@ -288,19 +323,28 @@ struct SynthOptions
   int subjects = 4;        ///< body shapes drawn from the seed
   double min_distance = 1.5, max_distance = 3.5;  ///< camera to body, metres
   double min_height = 0.8, max_height = 1.6;      ///< camera above the floor, metres
+  /** A MakeHuman directory (base.obj, default.mhskel, default_weights.mhw) for mesh
+    * bodies (buildMeshBody); empty: capsule and ellipsoid bodies (buildBody). */
+  std::string body_mesh;
 };
 
 /** Draws and renders frames; frame i depends only on the options and i. */
 class SynthGenerator
 {
 public:
-  /** \throws BvhError naming a bad motion file, std::invalid_argument for bad options */
+  /** \throws BvhError naming a bad motion file, HumanMeshError naming a bad mesh file,
+    * std::invalid_argument for bad options */
   explicit SynthGenerator (const SynthOptions &options);
 
   const SynthOptions &options () const { return options_; }
   const SensorModel &sensor () const { return sensor_; }
   const std::vector<MotionClip> &clips () const { return clips_; }
   const std::vector<BodyParams> &subjects () const { return subjects_; }
+
+  /** The mesh bodies are made of, null for capsule bodies. */
+  const HumanMesh *mesh () const { return mesh_.get (); }
+  /** The body a subject has on a clip frame: mesh or capsules, as the options say. */
+  BodyModel body (int clip, int clip_frame, int subject) const;
 
   /** Renders frame `index`. */
   SynthFrame render (std::uint64_t index) const;
@@ -309,9 +353,10 @@ public:
 
 private:
   SynthOptions options_;
-  SensorModel sensor_;
+  SensorModel sensor_, render_sensor_;
   std::vector<MotionClip> clips_;
   std::vector<BodyParams> subjects_;
+  std::shared_ptr<const HumanMesh> mesh_;
   std::vector<std::vector<double>> floor_;  ///< [clip][subject]: floor height, clip frame
 };
 

@@ -1,0 +1,83 @@
+#pragma once
+// The CC0 MakeHuman body (../shared/data/makehuman: base.obj, default.mhskel,
+// default_weights.mhw) as a skinned body for synthetic frames: the `body` group of the
+// base mesh, its 163-bone skeleton and the skin weights, posed by a CMU motion capture
+// skeleton (doc/synthetic.md, "Mesh bodies").
+#include <Eigen/Core>
+
+#include <array>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace agex
+{
+/** A MakeHuman asset file that cannot be used; what() names the file and the problem. */
+class HumanMeshError : public std::runtime_error
+{
+public:
+  using std::runtime_error::runtime_error;
+};
+
+class HumanMesh
+{
+public:
+  /** What a vertex belongs to: the parts whose tips are labelled, and the rest. */
+  enum Part : int
+  {
+    Trunk = 0,  ///< torso, neck, arms and legs
+    Head = 1,
+    LeftHand = 2,
+    RightHand = 3,
+    LeftFoot = 4,
+    RightFoot = 5
+  };
+  static constexpr int kParts = 6;
+
+  struct Bone
+  {
+    std::string name;
+    int parent = -1;  ///< index into bones(), -1 for the root
+    Eigen::Vector3d head = Eigen::Vector3d::Zero (), tail = Eigen::Vector3d::Zero ();  ///< rest pose, metres
+  };
+  struct Influence
+  {
+    int bone = 0;
+    double weight = 0.0;  ///< a vertex's weights sum to 1
+  };
+
+  /** \brief Reads base.obj, default.mhskel and default_weights.mhw from a directory.
+    * \throws HumanMeshError naming the file and what is wrong with it */
+  static HumanMesh load (const std::string &directory);
+
+  /** Rest-pose vertices of the `body` group in metres: +X the body's left, +Y up, +Z
+    * forward (MakeHuman's frame, decimetres in the file). */
+  const std::vector<Eigen::Vector3d> &vertices () const { return vertices_; }
+  /** The `body` group's faces, quads split in two. */
+  const std::vector<Eigen::Vector3i> &triangles () const { return triangles_; }
+  /** Bones, every parent before its children. */
+  const std::vector<Bone> &bones () const { return bones_; }
+  /** Index of a bone by name, -1 if there is none. */
+  int bone (const std::string &name) const;
+  /** Skin weights per vertex. */
+  const std::vector<std::vector<Influence>> &influences () const { return influences_; }
+  /** The part of each vertex (by the bone with the largest weight). */
+  const std::vector<Part> &parts () const { return parts_; }
+  /** The part of each triangle (that of most of its vertices). */
+  const std::vector<Part> &triangleParts () const { return triangle_parts_; }
+  /** Tip vertices of the labelled parts, indexed by Part (Trunk unused): the top of the
+    * head, the tip of each middle finger, the front of each foot. */
+  const std::array<int, kParts> &tipVertices () const { return tips_; }
+  /** Rest-pose height, top of the head to the soles, metres. */
+  double height () const { return height_; }
+
+private:
+  std::vector<Eigen::Vector3d> vertices_;
+  std::vector<Eigen::Vector3i> triangles_;
+  std::vector<Bone> bones_;
+  std::vector<std::vector<Influence>> influences_;
+  std::vector<Part> parts_, triangle_parts_;
+  std::array<int, kParts> tips_{};
+  double height_ = 0.0;
+};
+}  // namespace agex

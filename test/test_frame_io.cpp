@@ -826,6 +826,10 @@ TEST (AtomicFile, OutputMustNotBeAnInput)
                 std::runtime_error);
   EXPECT_THROW (agex::checkOutputIsNotInput ((dir.path () / "." / "frame.png").string (), {"a.png", input}),
                 std::runtime_error);
+  // A directory holding an input (replaced with --force, it would take the input along).
+  EXPECT_THROW (agex::checkOutputIsNotInput (dir.path ().string (), {input}), std::runtime_error);
+  EXPECT_THROW (agex::checkOutputIsNotInput (dir.path ().parent_path ().string (), {input}), std::runtime_error);
+  EXPECT_NO_THROW (agex::checkOutputIsNotInput ((dir.path () / "sub").string (), {input}));
   {
     // A relative spelling, from inside the directory.
     const fs::path cwd = fs::current_path ();

@@ -920,6 +920,32 @@ TEST (SynthMesh, HierarchyFindsTheSameHitsAsEveryTriangle)
     EXPECT_NEAR (sphere.distance (c + (p - c).normalized ()), 0.5, 0.01);
   }
   EXPECT_GT (hits, 100);
+  // Rays from anywhere, inside the sphere too, in any direction, some exactly along an
+  // axis (the slab test's 0 * inf case), some with t_min > 0.
+  const agex::SynthMesh box ({{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}},
+                             {{0, 1, 2}, {0, 2, 3}, {4, 6, 5}, {4, 7, 6}, {0, 4, 5}, {0, 5, 1},
+                              {3, 2, 6}, {3, 6, 7}, {0, 3, 7}, {0, 7, 4}, {1, 5, 6}, {1, 6, 2}});
+  for (int i = 0; i < 600; ++i)
+  {
+    const agex::SynthMesh &mesh = i % 2 ? sphere : box;
+    const Eigen::Vector3d centre = i % 2 ? c : Eigen::Vector3d (0.5, 0.5, 0.5);
+    const Eigen::Vector3d o = centre + Eigen::Vector3d (rng.uniform (-1, 1), rng.uniform (-1, 1), rng.uniform (-1, 1));
+    Eigen::Vector3d d (rng.normal (), rng.normal (), rng.normal ());
+    if (i % 5 == 0)
+      d = Eigen::Vector3d::Unit (i % 3) * (rng.chance (0.5) ? 1.0 : -1.0);
+    d.normalize ();
+    const double t_min = i % 3 == 0 ? rng.uniform (0.0, 0.5) : 0.0;
+    const double t = mesh.intersect (o, d, t_min, nullptr);
+    // The brute force counts hits after 1e-9; shift the origin to start at t_min.
+    double expected = bruteForceHit (mesh, o + t_min * d, d);
+    if (expected >= 0)
+      expected += t_min;
+    ASSERT_EQ (t < 0, expected < 0) << "ray " << i << " t " << t << " expected " << expected;
+    if (t >= 0)
+    {
+      EXPECT_NEAR (t, expected, 1e-9) << "ray " << i;
+    }
+  }
   // Placed in a scene as a primitive: the same hits after a rigid transform.
   Eigen::Isometry3d move = Eigen::Isometry3d::Identity ();
   move.rotate (Eigen::AngleAxisd (0.7, Eigen::Vector3d (1, 2, 3).normalized ()));
@@ -1017,6 +1043,44 @@ TEST (HumanMesh, BadFilesNameTheFile)
   write ("default.mhskel",
          "{\"joints\": {\"a\": [0], \"b\": [1]}, \"bones\": {\"root\": {\"head\": \"a\", \"tail\": \"b\", \"parent\": null}}}");
   EXPECT_NE (error ().find ("default.mhskel: the skeleton has no bone 'head'"), std::string::npos) << error ();
+  write ("default.mhskel",
+         "{\"joints\": {\"a\": [0]}, \"bones\": {\"root\": {\"head\": \"a\", \"tail\": \"zz\", \"parent\": null}}}");
+  EXPECT_NE (error ().find ("bone 'root' names joint 'zz'"), std::string::npos) << error ();
+  write ("default.mhskel",
+         "{\"joints\": {\"a\": [0], \"b\": [1e300]}, \"bones\": {\"root\": {\"head\": \"a\", \"tail\": \"b\", \"parent\": null}}}");
+  EXPECT_NE (error ().find ("joint 'b' names vertex 1e+300"), std::string::npos) << error ();
+  write ("default.mhskel", "[1, 2]");
+  EXPECT_NE (error ().find ("default.mhskel: not a MakeHuman skeleton"), std::string::npos) << error ();
+}
+
+TEST (HumanMesh, BadWeightsNameTheFile)
+{
+  AGEX_REQUIRE_MAKEHUMAN ();
+  TempDir dir;
+  for (const char *name : {"base.obj", "default.mhskel"})
+    fs::copy_file (sharedData (std::string ("makehuman/") + name), dir.path () / name);
+  auto error = [&] (const std::string &weights) -> std::string {
+    std::ofstream (dir.file ("default_weights.mhw")) << weights;
+    try
+    {
+      agex::HumanMesh::load (dir.path ().string ());
+    }
+    catch (const agex::HumanMeshError &e)
+    {
+      return e.what ();
+    }
+    return "(no error)";
+  };
+  std::string e = error ("{\"weights\": {\"nobone\": [[0, 1.0]]}}");
+  EXPECT_NE (e.find ("default_weights.mhw: weights for bone 'nobone'"), std::string::npos) << e;
+  e = error ("{\"weights\": {\"head\": [[18446744073709551615, 1.0]]}}");
+  EXPECT_NE (e.find ("default_weights.mhw: bone 'head': bad weight"), std::string::npos) << e;
+  e = error ("{\"weights\": {\"head\": [[0, -1]]}}");
+  EXPECT_NE (e.find ("bad weight"), std::string::npos) << e;
+  e = error ("{\"weights\": {\"head\": [[0, 1.0]]}}");
+  EXPECT_NE (e.find ("has no skin weight"), std::string::npos) << e;
+  e = error ("{\"weights\": 3}");
+  EXPECT_NE (e.find ("default_weights.mhw: not MakeHuman weights"), std::string::npos) << e;
 }
 
 TEST (HumanMesh, PosedBodyFollowsTheMotionCapture)
@@ -1038,7 +1102,7 @@ TEST (HumanMesh, PosedBodyFollowsTheMotionCapture)
     clip.motion.pose (frame, clip.scale, g);
     auto P = [&] (int j) { return g[static_cast<std::size_t> (j)].translation (); };
     const std::string where = "frame " + std::to_string (frame);
-    ASSERT_EQ (body.primitives.size (), 6u);
+    ASSERT_EQ (body.primitives.size (), static_cast<std::size_t> (agex::HumanMesh::kParts));
     EXPECT_NEAR (body.highest - body.lowest, height, 0.35 * height) << where;
     // Every segment points where the skeleton's does.
     const std::vector<Eigen::Vector3d> heads = agex::meshBoneHeads (clip, frame, params, mesh);

@@ -60,11 +60,24 @@ checkOutputIsNotInput (const std::string &output, const std::vector<std::string>
 {
   std::error_code ec;
   const fs::path out = fs::weakly_canonical (output, ec);
+  if (ec)
+    return;
   for (const auto &in : inputs)
   {
     const fs::path p = fs::weakly_canonical (in, ec);
-    if (!ec && p == out)
+    if (ec)
+      continue;
+    if (p == out)
       throw std::runtime_error (output + ": output would overwrite an input file; choose another path");
+    // A directory output replaced with --force would take its contents with it.
+    for (fs::path a = p.parent_path (); !a.empty (); a = a.parent_path ())
+    {
+      if (a == out)
+        throw std::runtime_error (output + ": output would replace a directory that holds the input " + in +
+                                  "; choose another path");
+      if (a == a.parent_path ())
+        break;
+    }
   }
 }
 }  // namespace agex

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <filesystem>
 #include <fstream>
 #include <limits>
@@ -61,6 +62,8 @@ readObj (const std::filesystem::path &path)
   while (std::getline (in, line))
   {
     ++number;
+    if (!line.empty () && line.back () == '\r')
+      line.pop_back ();  // CRLF files
     std::istringstream fields (line);
     std::string tag;
     fields >> tag;
@@ -72,7 +75,10 @@ readObj (const std::filesystem::path &path)
       obj.vertices.push_back (v * kDecimetre);
     }
     else if (tag == "g")
+    {
+      group.clear ();
       fields >> group;
+    }
     else if (tag == "f" && group == "body")
     {
       std::vector<int> face;
@@ -103,6 +109,18 @@ readObj (const std::filesystem::path &path)
   if (obj.body_faces.empty ())
     throw HumanMeshError (path.string () + ": no faces in group 'body'");
   return obj;
+}
+
+/** A JSON vertex index that fits, or -1. */
+long
+vertexIndex (const nlohmann::json &value, std::size_t count)
+{
+  if (!value.is_number_integer ())
+    return -1;
+  if (value.is_number_unsigned ())
+    return value.get<std::uint64_t> () < count ? static_cast<long> (value.get<std::uint64_t> ()) : -1;
+  const std::int64_t v = value.get<std::int64_t> ();
+  return v >= 0 && static_cast<std::uint64_t> (v) < count ? static_cast<long> (v) : -1;
 }
 
 bool
@@ -138,14 +156,18 @@ HumanMesh::load (const std::string &directory)
   try
   {
     const auto &joints = skeleton.at ("joints");
-    auto joint = [&] (const std::string &name) {
+    auto joint = [&] (const std::string &bone, const nlohmann::json &joint_name) {
+      const std::string name = joint_name.get<std::string> ();
+      if (!joints.contains (name) || !joints.at (name).is_array ())
+        throw HumanMeshError (skeleton_path.string () + ": bone '" + bone + "' names joint '" + name +
+                              "', which is not a list of vertices under \"joints\"");
       const auto &indices = joints.at (name);
       Eigen::Vector3d sum = Eigen::Vector3d::Zero ();
       for (const auto &i : indices)
       {
-        const long v = i.get<long> ();
-        if (v < 0 || v >= static_cast<long> (obj.vertices.size ()))
-          throw HumanMeshError (skeleton_path.string () + ": joint '" + name + "' names vertex " + std::to_string (v) +
+        const long v = vertexIndex (i, obj.vertices.size ());
+        if (v < 0)
+          throw HumanMeshError (skeleton_path.string () + ": joint '" + name + "' names vertex " + i.dump () +
                                 ", but " + obj_path.string () + " has " + std::to_string (obj.vertices.size ()));
         sum += obj.vertices[static_cast<std::size_t> (v)];
       }
@@ -155,6 +177,8 @@ HumanMesh::load (const std::string &directory)
     };
     // Parents first: repeatedly take the bones whose parent is placed (names sorted, so
     // the order does not depend on the file's).
+    if (!skeleton.is_object () || !joints.is_object () || !skeleton.at ("bones").is_object ())
+      throw HumanMeshError (skeleton_path.string () + ": not a MakeHuman skeleton: \"bones\" and \"joints\" must be objects");
     std::map<std::string, nlohmann::json> pending;
     for (const auto &[name, b] : skeleton.at ("bones").items ())
       pending.emplace (name, b);
@@ -180,8 +204,8 @@ HumanMesh::load (const std::string &directory)
         Bone bone;
         bone.name = it->first;
         bone.parent = parent_index;
-        bone.head = joint (b.at ("head").get<std::string> ());
-        bone.tail = joint (b.at ("tail").get<std::string> ());
+        bone.head = joint (bone.name, b.at ("head"));
+        bone.tail = joint (bone.name, b.at ("tail"));
         placed.emplace (bone.name, static_cast<int> (mesh.bones_.size ()));
         mesh.bones_.push_back (std::move (bone));
         it = pending.erase (it);
@@ -203,14 +227,16 @@ HumanMesh::load (const std::string &directory)
     if (mesh.bone (required) < 0)
       throw HumanMeshError (skeleton_path.string () + ": the skeleton has no bone '" + required + "'");
 
-  // The body group's vertices, renumbered.
+  // The body group's vertices, renumbered (obj_number keeps the file's, for messages).
   std::vector<int> renumber (obj.vertices.size (), -1);
+  std::vector<long> obj_number;
   for (const auto &face : obj.body_faces)
     for (const int v : face)
       if (renumber[static_cast<std::size_t> (v)] < 0)
       {
         renumber[static_cast<std::size_t> (v)] = static_cast<int> (mesh.vertices_.size ());
         mesh.vertices_.push_back (obj.vertices[static_cast<std::size_t> (v)]);
+        obj_number.push_back (v + 1L);
       }
   for (const auto &face : obj.body_faces)
     for (std::size_t k = 1; k + 1 < face.size (); ++k)
@@ -222,19 +248,26 @@ HumanMesh::load (const std::string &directory)
   mesh.influences_.resize (mesh.vertices_.size ());
   try
   {
+    if (!weights.is_object () || !weights.at ("weights").is_object ())
+      throw HumanMeshError (weights_path.string () + ": not MakeHuman weights: no \"weights\" object of bones");
     for (const auto &[name, list] : weights.at ("weights").items ())
     {
+      if (!list.is_array ())
+        throw HumanMeshError (weights_path.string () + ": bone '" + name + "': weights must be a list of [vertex, weight]");
       const int b = mesh.bone (name);
       if (b < 0)
         throw HumanMeshError (weights_path.string () + ": weights for bone '" + name + "', which " +
                               skeleton_path.string () + " does not have");
       for (const auto &pair : list)
       {
-        const long v = pair.at (0).get<long> ();
-        const double w = pair.at (1).get<double> ();
-        if (v < 0 || v >= static_cast<long> (renumber.size ()) || !(w >= 0.0) || !std::isfinite (w))
-          throw HumanMeshError (weights_path.string () + ": bone '" + name + "': bad weight [" + std::to_string (v) +
-                                ", " + std::to_string (w) + "]");
+        if (!pair.is_array () || pair.size () != 2)
+          throw HumanMeshError (weights_path.string () + ": bone '" + name + "': bad weight " + pair.dump () +
+                                " (a vertex of " + obj_path.string () + " and a weight >= 0)");
+        const long v = vertexIndex (pair.at (0), renumber.size ());
+        const double w = pair.at (1).is_number () ? pair.at (1).get<double> () : -1.0;
+        if (v < 0 || !(w >= 0.0) || !std::isfinite (w))
+          throw HumanMeshError (weights_path.string () + ": bone '" + name + "': bad weight " + pair.dump () +
+                                " (a vertex of " + obj_path.string () + " and a weight >= 0)");
         const int r = renumber[static_cast<std::size_t> (v)];
         if (r >= 0 && w > 0.0)
           mesh.influences_[static_cast<std::size_t> (r)].push_back (Influence{b, w});
@@ -252,7 +285,9 @@ HumanMesh::load (const std::string &directory)
     for (const auto &i : list)
       sum += i.weight;
     if (!(sum > 0.0))
-      throw HumanMeshError (weights_path.string () + ": body vertex " + std::to_string (v) + " has no skin weight");
+      throw HumanMeshError (weights_path.string () + ": vertex " + std::to_string (obj_number[v] - 1) + " (line 'v' #" +
+                            std::to_string (obj_number[v]) + " of " + obj_path.string () +
+                            ", group body) has no skin weight");
     for (auto &i : list)
       i.weight /= sum;
   }
@@ -261,6 +296,8 @@ HumanMesh::load (const std::string &directory)
   const int head = mesh.bone ("head");
   const int hands[2] = {mesh.bone ("wrist.L"), mesh.bone ("wrist.R")};
   const int feet[2] = {mesh.bone ("foot.L"), mesh.bone ("foot.R")};
+  const int arms[2] = {mesh.bone ("upperarm01.L"), mesh.bone ("upperarm01.R")};
+  const int legs[2] = {mesh.bone ("upperleg01.L"), mesh.bone ("upperleg01.R")};
   std::vector<Part> bone_part (mesh.bones_.size (), Trunk);
   for (std::size_t b = 0; b < mesh.bones_.size (); ++b)
   {
@@ -269,6 +306,11 @@ HumanMesh::load (const std::string &directory)
       bone_part[b] = Head;
     for (int side = 0; side < 2; ++side)
     {
+      // Hands and feet lie inside the arm and leg subtrees: test them last.
+      if (isInSubtree (mesh.bones_, bi, arms[side]))
+        bone_part[b] = side == 0 ? LeftArm : RightArm;
+      if (isInSubtree (mesh.bones_, bi, legs[side]))
+        bone_part[b] = side == 0 ? LeftLeg : RightLeg;
       if (isInSubtree (mesh.bones_, bi, hands[side]))
         bone_part[b] = side == 0 ? LeftHand : RightHand;
       if (isInSubtree (mesh.bones_, bi, feet[side]))
@@ -310,7 +352,7 @@ HumanMesh::load (const std::string &directory)
                             (part == Head ? "head" : part <= RightHand ? "hands" : "feet"));
     return best;
   };
-  mesh.tips_[Trunk] = -1;
+  mesh.tips_.fill (-1);
   mesh.tips_[Head] = extreme (Head, Eigen::Vector3d::Zero (), Eigen::Vector3d::UnitY ());
   for (int side = 0; side < 2; ++side)
   {
@@ -332,6 +374,9 @@ HumanMesh::load (const std::string &directory)
     highest = std::max (highest, v.y ());
   }
   mesh.height_ = highest - lowest;
+  if (!(mesh.height_ >= 0.5))
+    throw HumanMeshError (obj_path.string () + ": the body is " + std::to_string (mesh.height_) +
+                          " m tall (decimetres read as 0.1 m); a standing person is expected");
   return mesh;
 }
 }  // namespace agex

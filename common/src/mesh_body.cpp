@@ -80,7 +80,8 @@ class MeshPose
 {
 public:
   MeshPose (const MotionClip &clip, int frame, const BodyParams &params, const HumanMesh &mesh)
-    : mesh_ (mesh), params_ (params), drivers_ (boneDrivers (mesh))
+    : mesh_ (mesh), params_ (params), drivers_ (boneDrivers (mesh)),
+      head_pivot_ (mesh.bones ()[static_cast<std::size_t> (mesh.bone ("head"))].head)
   {
     const SkeletonMap &m = clip.map;
     // Rest mesh -> world: MakeHuman's (left, up, forward) onto the clip's, scaled to the
@@ -184,8 +185,8 @@ private:
   {
     const auto &bone = mesh_.bones ()[b];
     const Shaping how = shapingOf (drivers_[b]);
-    if (how == Shaping::Head)
-      return bone.head + params_.head_scale * (v - bone.head);
+    if (how == Shaping::Head)  // face bones too: the whole head about the top of the neck
+      return head_pivot_ + params_.head_scale * (v - head_pivot_);
     const Eigen::Vector3d axis = bone.tail - bone.head;
     const double len2 = axis.squaredNorm ();
     const Eigen::Vector3d on_axis = len2 > 1e-12 ? Eigen::Vector3d (bone.head + axis * ((v - bone.head).dot (axis) / len2))
@@ -208,6 +209,7 @@ private:
   const HumanMesh &mesh_;
   const BodyParams &params_;
   std::vector<int> drivers_;
+  Eigen::Vector3d head_pivot_;
   Eigen::Matrix3d to_world_;
   std::vector<Eigen::Matrix3d> rotation_;
   std::vector<Eigen::Vector3d> rest_head_, posed_head_;
@@ -224,7 +226,9 @@ buildMeshBody (const MotionClip &clip, int frame, const BodyParams &params, cons
     posed[v] = pose.vertex (v);
 
   BodyModel body;
-  // One mesh per part, so a label's visibility test can ask which part a ray hit.
+  // One mesh per part, so a label's visibility test can ask which part a ray hit, the
+  // renderer sees limb edges in front of the torso as edges between primitives, and
+  // the room is kept clear of each part's own bounding sphere.
   for (int part = 0; part < HumanMesh::kParts; ++part)
   {
     std::vector<int> local (n, -1);
@@ -258,7 +262,9 @@ buildMeshBody (const MotionClip &clip, int frame, const BodyParams &params, cons
   const HumanMesh::Part parts[5] = {HumanMesh::Head, HumanMesh::LeftHand, HumanMesh::RightHand, HumanMesh::LeftFoot,
                                     HumanMesh::RightFoot};
   const char *bases[5] = {"head", "wrist.L", "wrist.R", "foot.L", "foot.R"};
-  const double radius[5] = {0.095 * s * params.head_scale, 0.03 * s, 0.03 * s, 0.04 * s, 0.04 * s};
+  const double extremity = 0.5 + 0.5 * params.girth;
+  const double radius[5] = {0.095 * s * params.head_scale, 0.03 * s * extremity, 0.03 * s * extremity,
+                            0.04 * s * extremity, 0.04 * s * extremity};
   for (int i = 0; i < 5; ++i)
   {
     body.tip[i] = posed[static_cast<std::size_t> (mesh.tipVertices ()[parts[i]])];

@@ -58,7 +58,22 @@ closestOnTriangle (const Eigen::Vector3d &p, const Eigen::Vector3d &a, const Eig
   const double va = d3 * d6 - d5 * d4;
   if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0)
     return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
-  const double denom = 1.0 / (va + vb + vc);
+  const double sum = va + vb + vc;
+  if (!(sum > 0.0))
+  {
+    // A degenerate triangle (collinear corners): the nearest of its edges.
+    auto onSegment = [&] (const Eigen::Vector3d &s, const Eigen::Vector3d &e) {
+      const Eigen::Vector3d se = e - s;
+      const double len2 = se.squaredNorm ();
+      return Eigen::Vector3d (len2 > 0 ? s + se * std::clamp ((p - s).dot (se) / len2, 0.0, 1.0) : s);
+    };
+    Eigen::Vector3d best = onSegment (a, b);
+    for (const Eigen::Vector3d &q : {onSegment (b, c), onSegment (c, a)})
+      if ((q - p).squaredNorm () < (best - p).squaredNorm ())
+        best = q;
+    return best;
+  }
+  const double denom = 1.0 / sum;
   return a + ab * (vb * denom) + ac * (vc * denom);
 }
 }  // namespace
@@ -67,6 +82,9 @@ SynthMesh::SynthMesh (std::vector<Eigen::Vector3d> vertices, std::vector<Eigen::
   : vertices_ (std::move (vertices)), triangles_ (std::move (triangles))
 {
   const int n = static_cast<int> (vertices_.size ());
+  for (const auto &v : vertices_)
+    if (!v.allFinite ())
+      throw std::invalid_argument ("SynthMesh: a vertex is not finite");
   for (const auto &t : triangles_)
     for (int k = 0; k < 3; ++k)
       if (t[k] < 0 || t[k] >= n)

@@ -994,6 +994,9 @@ private:
 void
 renderScene (const SynthScene &scene, const SensorModel &sensor, SynthRng &rng, SynthFrame &frame)
 {
+  if (sensor.sensor == SynthSensor::Bonn)
+    throw std::invalid_argument ("renderScene: bonn frames are rendered with renderSensorModel (SynthSensor::Bonn), "
+                                 "then made into the Bonn view");
   const int w = sensor.width, h = sensor.height;
   const std::size_t n = static_cast<std::size_t> (w) * h;
   const CameraIntrinsics &k = sensor.intrinsics;

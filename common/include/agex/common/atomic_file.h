@@ -12,7 +12,7 @@ namespace agex
   * \throws std::runtime_error naming the path and the reason on failure */
 void writeFileAtomic (const std::string &path, const std::string &bytes);
 
-/** \brief Throws std::runtime_error if output names the same file as any input
-  * (so an app never overwrites what it reads). */
+/** \brief Throws std::runtime_error if output names the same file as any input, or a
+  * directory that holds one (so an app never overwrites or replaces what it reads). */
 void checkOutputIsNotInput (const std::string &output, const std::vector<std::string> &inputs);
 }  // namespace agex

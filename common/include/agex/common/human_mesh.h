@@ -25,14 +25,18 @@ public:
   /** What a vertex belongs to: the parts whose tips are labelled, and the rest. */
   enum Part : int
   {
-    Trunk = 0,  ///< torso, neck, arms and legs
+    Trunk = 0,  ///< torso, neck, shoulders and hips
     Head = 1,
     LeftHand = 2,
     RightHand = 3,
     LeftFoot = 4,
-    RightFoot = 5
+    RightFoot = 5,
+    LeftArm = 6,  ///< upper arm and forearm
+    RightArm = 7,
+    LeftLeg = 8,  ///< thigh and shin
+    RightLeg = 9
   };
-  static constexpr int kParts = 6;
+  static constexpr int kParts = 10;
 
   struct Bone
   {
@@ -65,10 +69,10 @@ public:
   const std::vector<Part> &parts () const { return parts_; }
   /** The part of each triangle (that of most of its vertices). */
   const std::vector<Part> &triangleParts () const { return triangle_parts_; }
-  /** Tip vertices of the labelled parts, indexed by Part (Trunk unused): the top of the
-    * head, the tip of each middle finger, the front of each foot. */
+  /** Tip vertices of the labelled parts, indexed by Part (-1 for the others): the top
+    * of the head, the tip of each middle finger, the front of each foot. */
   const std::array<int, kParts> &tipVertices () const { return tips_; }
-  /** Rest-pose height, top of the head to the soles, metres. */
+  /** Rest-pose height, top of the head to the soles, metres (at least 0.5). */
   double height () const { return height_; }
 
 private:

@@ -254,8 +254,8 @@ class HumanMesh;
   * the mesh is scaled to the clip's rest height times params.height_scale, shaped by
   * the other params, and each bone follows the motion capture segment it lies on
   * (rotation of the segment's joint, then turned so the bone points where the segment
-  * does; doc/synthetic.md). Six mesh primitives: trunk, head, left and right hand,
-  * left and right foot; tips are mesh vertices (top of the head, middle finger tips,
+  * does; doc/synthetic.md). One mesh primitive per HumanMesh::Part, in its order
+  * (trunk, head, hands, feet, arms, legs); tips are mesh vertices (top of the head, middle finger tips,
   * toe fronts), bases the neck, wrist and ankle joints. */
 BodyModel buildMeshBody (const MotionClip &clip, int frame, const BodyParams &params, const HumanMesh &mesh);
 

@@ -109,16 +109,9 @@ convertBonn (const std::string &input, const std::string &output, const std::str
   agex::DatasetInfo info;
   info.name = std::string ("bonn-") + view_name;
   info.sensor = "kinect";
-  info.intrinsics = options.intrinsics;
+  info.intrinsics = portrait ? view.intrinsics (options.intrinsics) : options.intrinsics;
   info.width = portrait ? view.outputWidth () : 640;
   info.height = portrait ? view.outputHeight () : 480;
-  if (portrait)
-  {
-    info.intrinsics.fx *= view.scale;
-    info.intrinsics.fy *= view.scale;
-    info.intrinsics.cx = view.scale * (options.intrinsics.cx - view.x + 0.5) - 0.5;
-    info.intrinsics.cy = view.scale * (options.intrinsics.cy - view.y + 0.5) - 0.5;
-  }
   const double scale = options.depth_scale > 0 ? options.depth_scale : 0.016;
   info.depth_scale = scale;
   std::ostringstream provenance;

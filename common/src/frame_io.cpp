@@ -236,6 +236,17 @@ FrameView::toView (const cv::Point2f &source) const
           static_cast<float> ((source.y - y + 0.5) * scale - 0.5)};
 }
 
+CameraIntrinsics
+FrameView::intrinsics (const CameraIntrinsics &source) const
+{
+  CameraIntrinsics k = source;
+  k.fx *= scale;
+  k.fy *= scale;
+  k.cx = scale * (source.cx - x + 0.5) - 0.5;  // as toView
+  k.cy = scale * (source.cy - y + 0.5) - 0.5;
+  return k;
+}
+
 FrameView
 bonnPortraitView ()
 {

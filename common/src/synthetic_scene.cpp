@@ -160,10 +160,7 @@ sensorModel (SynthSensor sensor)
     m.sensor = sensor;
     m.width = view.outputWidth ();
     m.height = view.outputHeight ();
-    m.intrinsics.fx *= view.scale;
-    m.intrinsics.fy *= view.scale;
-    m.intrinsics.cx = view.scale * (m.intrinsics.cx - view.x + 0.5) - 0.5;
-    m.intrinsics.cy = view.scale * (m.intrinsics.cy - view.y + 0.5) - 0.5;
+    m.intrinsics = view.intrinsics (m.intrinsics);
     return m;
   }
   SensorModel m;

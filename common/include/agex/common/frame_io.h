@@ -88,6 +88,8 @@ struct FrameView
   cv::Point sourcePixel (int u, int v) const;
   /** Continuous source pixel coordinate to output coordinate. */
   cv::Point2f toView (const cv::Point2f &source) const;
+  /** The intrinsics of the view of a frame with intrinsics `source`. */
+  CameraIntrinsics intrinsics (const CameraIntrinsics &source) const;
 };
 
 /** The view the Bonn source worked on: crop x=140, y=20, 360x440, scaled by 0.4 (144x176). */

@@ -59,7 +59,10 @@ main (int argc, char **argv)
     ("max-height", po::value (&options.max_height)->default_value (options.max_height, "1.6"), "camera above the floor, metres")
     ("body-mesh", po::value (&options.body_mesh),
      "MakeHuman directory (base.obj, default.mhskel, default_weights.mhw, e.g. ../shared/data/makehuman): skinned mesh "
-     "bodies instead of capsules");
+     "bodies instead of capsules")
+    ("colour", po::bool_switch (&options.colour),
+     "also paint each frame in colour (random clothes, room and light; sr4000 and kinect): XYZRGBA frames for "
+     "agex_annotate rgbd; the depth stays the same");
   po::positional_options_description positional;
 
   try

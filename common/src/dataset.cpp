@@ -371,26 +371,55 @@ DatasetWriter::~DatasetWriter ()
   }
 }
 
+namespace
+{
+template <typename PointT>
 void
-DatasetWriter::addFrame (const std::string &id, const std::string &sequence,
-                         const pcl::PointCloud<pcl::PointXYZ> &cloud, const std::vector<PartLabel> &labels)
+writeFrameFile (const std::string &path, const pcl::PointCloud<PointT> &cloud)
+{
+  if (pcl::io::savePCDFileBinaryCompressed (path, cloud) != 0)
+    throw DatasetError (path + ": cannot write frame");
+}
+}  // namespace
+
+std::string
+DatasetWriter::framePath (const std::string &id, std::uint32_t width, std::uint32_t height) const
 {
   if (!validId (id))
     throw DatasetError ("bad frame id '" + id + "' (letters, digits, '_', '-', '.')");
   if (std::any_of (frames_.begin (), frames_.end (), [&] (const DatasetFrame &f) { return f.id == id; }))
     throw DatasetError ("frame id '" + id + "' added twice");
-  if (static_cast<int> (cloud.width) != info_.width || static_cast<int> (cloud.height) != info_.height)
-    throw DatasetError ("frame '" + id + "' is " + std::to_string (cloud.width) + "x" + std::to_string (cloud.height) +
+  if (static_cast<int> (width) != info_.width || static_cast<int> (height) != info_.height)
+    throw DatasetError ("frame '" + id + "' is " + std::to_string (width) + "x" + std::to_string (height) +
                         ", the dataset is " + std::to_string (info_.width) + "x" + std::to_string (info_.height));
-  const std::string path = (fs::path (staging_) / "frames" / (id + ".pcd")).string ();
-  if (pcl::io::savePCDFileBinaryCompressed (path, cloud) != 0)
-    throw DatasetError (path + ": cannot write frame");
+  return (fs::path (staging_) / "frames" / (id + ".pcd")).string ();
+}
+
+void
+DatasetWriter::addLabels (const std::string &id, const std::string &sequence, const std::vector<PartLabel> &labels)
+{
   frames_.push_back ({id, sequence});
   for (PartLabel label : labels)
   {
     label.frame = id;
     labels_.push_back (label);
   }
+}
+
+void
+DatasetWriter::addFrame (const std::string &id, const std::string &sequence,
+                         const pcl::PointCloud<pcl::PointXYZ> &cloud, const std::vector<PartLabel> &labels)
+{
+  writeFrameFile (framePath (id, cloud.width, cloud.height), cloud);
+  addLabels (id, sequence, labels);
+}
+
+void
+DatasetWriter::addFrame (const std::string &id, const std::string &sequence,
+                         const pcl::PointCloud<pcl::PointXYZRGBA> &cloud, const std::vector<PartLabel> &labels)
+{
+  writeFrameFile (framePath (id, cloud.width, cloud.height), cloud);
+  addLabels (id, sequence, labels);
 }
 
 void

@@ -214,6 +214,26 @@ private:
   std::vector<Eigen::Matrix3d> rotation_;
   std::vector<Eigen::Vector3d> rest_head_, posed_head_;
 };
+
+SynthMaterial
+partMaterial (HumanMesh::Part part)
+{
+  switch (part)
+  {
+  case HumanMesh::Head:
+  case HumanMesh::LeftHand:
+  case HumanMesh::RightHand:
+    return SynthMaterial::Skin;
+  case HumanMesh::LeftFoot:
+  case HumanMesh::RightFoot:
+    return SynthMaterial::Shoes;
+  case HumanMesh::LeftLeg:
+  case HumanMesh::RightLeg:
+    return SynthMaterial::Bottom;
+  default:
+    return SynthMaterial::Top;
+  }
+}
 }  // namespace
 
 BodyModel
@@ -254,6 +274,7 @@ buildMeshBody (const MotionClip &clip, int frame, const BodyParams &params, cons
     SynthPrimitive primitive = SynthPrimitive::triangleMesh (
         std::make_shared<const SynthMesh> (std::move (vertices), std::move (triangles)), SynthObject::Person);
     primitive.reflectivity = static_cast<float> (params.reflectivity);
+    primitive.material = partMaterial (static_cast<HumanMesh::Part> (part));
     body.primitives.push_back (std::move (primitive));
   }
 

@@ -2,6 +2,8 @@
 
 #include <agex/common/human_mesh.h>
 
+#include <pcl/common/io.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -689,8 +691,10 @@ buildBody (const MotionClip &clip, int frame, const BodyParams &bp)
   const double girth = s * bp.girth;
 
   BodyModel body;
+  SynthMaterial material = SynthMaterial::Skin;  // of the primitives added next
   auto add = [&] (SynthPrimitive p) {
     p.reflectivity = refl;
+    p.material = material;
     body.primitives.push_back (p);
   };
   auto capsule = [&] (const Eigen::Vector3d &a, const Eigen::Vector3d &b, double r) {
@@ -716,6 +720,7 @@ buildBody (const MotionClip &clip, int frame, const BodyParams &bp)
   capsule (P (m.neck), P (m.head), 0.052 * girth);
   // Torso: chest, abdomen and pelvis ellipsoids, a capsule across the shoulders.
   const double td = bp.torso_depth;
+  material = SynthMaterial::Top;
   {
     const Eigen::Matrix3d cb = B (m.spine_mid);
     const Eigen::Vector3d c = 0.5 * (P (m.spine_mid) + P (m.neck)) + cb * Eigen::Vector3d (0, 0.01, -0.01) * s;
@@ -738,6 +743,7 @@ buildBody (const MotionClip &clip, int frame, const BodyParams &bp)
     // Arms and hands.
     const double arm = girth * bp.arm_girth;
     const Eigen::Vector3d sh = P (m.shoulder[side]), el = P (m.elbow[side]), wr = P (m.wrist[side]);
+    material = SynthMaterial::Top;
     capsule (sh, el, 0.047 * arm);
     capsule (el, wr, 0.038 * arm);
     Eigen::Vector3d hand_dir = wr - el;
@@ -750,6 +756,7 @@ buildBody (const MotionClip &clip, int frame, const BodyParams &bp)
     const double hand_len = 0.12 * s;
     body.tip_primitives[1 + side] = {static_cast<int> (body.primitives.size ())};
     body.tip_tolerance[1 + side] = hand_r + 0.03;
+    material = SynthMaterial::Skin;
     capsule (wr + hand_dir * 0.02 * s, wr + hand_dir * hand_len, hand_r);
     body.tip[1 + side] = wr + hand_dir * (hand_len + hand_r);
     body.base[1 + side] = wr;
@@ -757,6 +764,7 @@ buildBody (const MotionClip &clip, int frame, const BodyParams &bp)
     // Legs: capsules with a thigh and a calf ellipsoid for the taper.
     const double leg = girth * bp.leg_girth;
     const Eigen::Vector3d hp = P (m.hip[side]), kn = P (m.knee[side]), an = P (m.ankle[side]);
+    material = SynthMaterial::Bottom;
     capsule (hp, kn, 0.06 * leg);
     capsule (kn, an, 0.045 * leg);
     {
@@ -789,6 +797,7 @@ buildBody (const MotionClip &clip, int frame, const BodyParams &bp)
     body.tip_primitives[3 + side] = {static_cast<int> (body.primitives.size ()),
                                      static_cast<int> (body.primitives.size ()) + 1};
     body.tip_tolerance[3 + side] = foot_r + 0.03;
+    material = SynthMaterial::Shoes;
     capsule (heel, ball, foot_r);
     capsule (ball, toe_end, toe_r);
     body.tip[3 + side] = toe_end + (toe_end - ball).normalized () * toe_r;
@@ -1356,6 +1365,8 @@ SynthGenerator::SynthGenerator (const SynthOptions &options)
     throw std::invalid_argument ("camera distances must satisfy 0.3 < min <= max");
   if (options.max_height < options.min_height)
     throw std::invalid_argument ("camera heights must satisfy min <= max");
+  if (options.colour && options.sensor == SynthSensor::Bonn)
+    throw std::invalid_argument ("colour frames need sensor sr4000 or kinect (bonn frames are a grey depth view)");
   for (const auto &path : options.motion_files)
     clips_.push_back (MotionClip::load (path, options.bvh_scale));
   SynthRng rng = SynthRng::forItem (options.seed, ~0ull);
@@ -1537,6 +1548,12 @@ SynthGenerator::render (std::uint64_t index) const
 
   const SynthScene scene = world.transformed (world_to_camera);
   renderScene (scene, render_sensor_, rng, frame);
+  if (options_.colour)
+  {
+    // A stream of its own, so colour frames have the same depth as depth-only ones.
+    SynthRng colour_rng = SynthRng::forItem (options_.seed ^ 0xC0105EEDC0105EEDull, index);
+    shadeColour (render_sensor_, colour_rng, frame);
+  }
   if (options_.sensor == SynthSensor::Bonn)
     toBonnView (render_sensor_, sensor_, frame);
   makeLabels (body.transformed (world_to_camera), sensor_, frame);
@@ -1593,7 +1610,22 @@ writeSyntheticDataset (const SynthGenerator &generator, int frames, const std::s
     const auto t0 = clock::now ();
     const SynthFrame frame = generator.render (static_cast<std::uint64_t> (i));
     const auto t1 = clock::now ();
-    writer.addFrame (synthFrameId (static_cast<std::uint64_t> (i)), frame.sequence, frame.cloud, frame.labels);
+    const std::string id = synthFrameId (static_cast<std::uint64_t> (i));
+    if (frame.colour.empty ())
+      writer.addFrame (id, frame.sequence, frame.cloud, frame.labels);
+    else
+    {
+      pcl::PointCloud<pcl::PointXYZRGBA> coloured;
+      pcl::copyPointCloud (frame.cloud, coloured);
+      for (std::size_t p = 0; p < coloured.size (); ++p)
+      {
+        coloured[p].r = frame.colour[p][0];
+        coloured[p].g = frame.colour[p][1];
+        coloured[p].b = frame.colour[p][2];
+        coloured[p].a = 255;
+      }
+      writer.addFrame (id, frame.sequence, coloured, frame.labels);
+    }
     const auto t2 = clock::now ();
     stats.render_ms += std::chrono::duration<double, std::milli> (t1 - t0).count ();
     stats.write_ms += std::chrono::duration<double, std::milli> (t2 - t1).count ();

@@ -15,6 +15,7 @@
 
 #include <Eigen/Core>
 
+#include <cstdint>
 #include <map>
 #include <memory>
 #include <stdexcept>
@@ -123,6 +124,9 @@ public:
     * made of letters, digits, '_', '-' and '.'. */
   void addFrame (const std::string &id, const std::string &sequence, const pcl::PointCloud<pcl::PointXYZ> &cloud,
                  const std::vector<PartLabel> &labels);
+  /** The same with colour (an RGB-D frame): readers take x, y, z; agex_annotate rgbd the colour. */
+  void addFrame (const std::string &id, const std::string &sequence, const pcl::PointCloud<pcl::PointXYZRGBA> &cloud,
+                 const std::vector<PartLabel> &labels);
   /** Writes dataset.json and labels.csv and moves the dataset into place. */
   void commit ();
 
@@ -132,5 +136,9 @@ private:
   bool overwrite_ = false, committed_ = false;
   std::vector<DatasetFrame> frames_;
   std::vector<PartLabel> labels_;
+
+  /** Checks id and size; returns the frame's path in the staging directory. */
+  std::string framePath (const std::string &id, std::uint32_t width, std::uint32_t height) const;
+  void addLabels (const std::string &id, const std::string &sequence, const std::vector<PartLabel> &labels);
 };
 }  // namespace agex

@@ -27,6 +27,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include <array>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -121,6 +122,17 @@ enum class SynthObject : std::uint8_t
   Person = 4
 };
 
+/** What a body surface is dressed in, for colour frames (SynthOptions::colour); the
+  * room's surfaces take their colour from their SynthObject. */
+enum class SynthMaterial : std::uint8_t
+{
+  Default = 0,
+  Skin = 1,    ///< head, neck, hands
+  Top = 2,     ///< torso and arms
+  Bottom = 3,  ///< legs
+  Shoes = 4
+};
+
 struct SynthPrimitive
 {
   enum class Shape
@@ -134,6 +146,7 @@ struct SynthPrimitive
   Shape shape = Shape::Capsule;
   SynthObject object = SynthObject::None;
   float reflectivity = 0.7f;  ///< 0..1, for the time-of-flight amplitude
+  SynthMaterial material = SynthMaterial::Default;
   Eigen::Vector3d a = Eigen::Vector3d::Zero (), b = Eigen::Vector3d::Zero ();
   double radius = 0.0;
   Eigen::Vector3d centre = Eigen::Vector3d::Zero ();
@@ -292,6 +305,8 @@ struct SynthFrame
   std::vector<int> primitive;       ///< scene primitive seen at the pixel centre, -1 if none
   std::vector<float> ideal_z;       ///< depth at the pixel centre, NaN if nothing
   std::vector<float> sample_min_z, sample_max_z;  ///< over the pixel's samples (NaN if none hit)
+  /** Colour image (row-major r, g, b), filled by shadeColour; empty for depth-only frames. */
+  std::vector<std::array<std::uint8_t, 3>> colour;
   SynthScene scene;                 ///< the scene in the camera frame
   Eigen::Isometry3d world_to_camera = Eigen::Isometry3d::Identity ();
   // What was drawn:
@@ -301,6 +316,15 @@ struct SynthFrame
 
 /** \brief Renders a scene (camera frame) with a sensor model; draws the noise from rng. */
 void renderScene (const SynthScene &scene, const SensorModel &sensor, SynthRng &rng, SynthFrame &frame);
+
+/** \brief Paints a rendered frame as a colour camera would see it (frame.colour), with
+  * random appearance so that 2D models trained on it cannot lean on any one look: per
+  * frame random skin tone, clothes (top, bottom, shoes), wall, floor and clutter colours,
+  * a random light with Lambert shading, faint clothes texture, a strong random pattern on
+  * the room's surfaces, a 3x3 blur and pixel noise. Uses the pixel-centre primitives of
+  * renderScene; registered with the depth (the colour camera sits at the depth camera).
+  * Draws everything from rng, never from the frame's depth noise. */
+void shadeColour (const SensorModel &sensor, SynthRng &rng, SynthFrame &frame);
 
 /** \brief Labels for the body's tips and bases (camera frame, the body's primitives
   * first in frame.scene), projected with the sensor's intrinsics. A tip is visible if
@@ -326,6 +350,9 @@ struct SynthOptions
   /** A MakeHuman directory (base.obj, default.mhskel, default_weights.mhw) for mesh
     * bodies (buildMeshBody); empty: capsule and ellipsoid bodies (buildBody). */
   std::string body_mesh;
+  /** Also paint colour frames (shadeColour; sr4000 and kinect only); the depth is the same
+    * as without. */
+  bool colour = false;
 };
 
 /** Draws and renders frames; frame i depends only on the options and i. */

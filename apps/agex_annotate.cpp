@@ -205,7 +205,7 @@ annotateRgbd (int argc, char **argv)
   po::options_description options ("agex_annotate rgbd INPUT... --out XML [options]\n"
                                    "Contour landmarks from organized XYZRGBA clouds (.pcd): the depth stages segment\n"
                                    "each person, AGEX extrema anchor the landmarks on the colour silhouette. Clouds\n"
-                                   "without colour (agex_synth frames) give a shaded depth image instead.");
+                                   "without colour (agex_synth frames made without --colour) give a shaded depth image instead.");
   options.add (commonDescription (common));
   options.add_options () ("input", po::value (&inputs)->multitoken (), "organized XYZRGBA PCD files")
     ("images-dir", po::value (&images_dir), "where the colour images are written (default: <out>_images)")

@@ -33,6 +33,12 @@ namespace
 using Cloud = pcl::PointCloud<pcl::PointXYZ>;
 using Clock = std::chrono::steady_clock;
 
+/** RANSAC tries for the floor before giving up. */
+constexpr int kFloorAttempts = 3;
+/** A point this far under a candidate floor (or 3 floor distances, if more) is clearly
+  * below it, not noise; a floor has few such points, at most a quarter of its inliers. */
+constexpr float kFloorClearlyBelow = 0.10f;
+
 double
 msSince (Clock::time_point start)
 {
@@ -150,12 +156,18 @@ runDepthPipeline (const pcl::PointCloud<pcl::PointXYZ>::ConstPtr &input, const P
 
   // 4. Floor: RANSAC for a plane whose normal is within the tilt limit of "up",
   // then every point on or below it goes, including the soles where feet touch it.
+  // The floor is the lowest surface in view: a plane with much of the scene under it (a
+  // desk top, or a tilted plane through a patch of wall) is not the floor, and removing
+  // everything below it would take the legs. RANSAC then tries again among the points
+  // under that plane, where the floor must be and where it is no longer outnumbered.
   start = Clock::now ();
   if (params.remove_floor)
   {
     // Every 4th point is plenty for RANSAC and keeps the stage cheap.
     pcl::IndicesPtr sample = finiteIndices (*cloud, 4);
-    if (static_cast<int> (sample->size ()) >= params.floor_min_inliers)
+    const auto verbosity = pcl::console::getVerbosityLevel ();
+    for (int attempt = 0; attempt < kFloorAttempts && static_cast<int> (sample->size ()) >= params.floor_min_inliers;
+         ++attempt)
     {
       pcl::SACSegmentation<pcl::PointXYZ> sac;
       sac.setInputCloud (cloud);
@@ -169,24 +181,36 @@ runDepthPipeline (const pcl::PointCloud<pcl::PointXYZ>::ConstPtr &input, const P
       pcl::PointIndices inliers;
       pcl::ModelCoefficients coefficients;
       // A frame without a floor in view is normal here, not an error worth printing.
-      const auto verbosity = pcl::console::getVerbosityLevel ();
       pcl::console::setVerbosityLevel (pcl::console::L_ALWAYS);
       sac.segment (inliers, coefficients);
       pcl::console::setVerbosityLevel (verbosity);
-      if (static_cast<int> (inliers.indices.size ()) >= params.floor_min_inliers / 4 &&
-          coefficients.values.size () == 4)
+      if (static_cast<int> (inliers.indices.size ()) < params.floor_min_inliers / 4 || coefficients.values.size () != 4)
+        break;
+      Eigen::Vector4f plane (coefficients.values[0], coefficients.values[1], coefficients.values[2],
+                             coefficients.values[3]);
+      plane /= plane.head<3> ().norm ();
+      if (plane.head<3> ().dot (params.up) < 0.f)
+        plane = -plane;  // normal points up: signed distance > 0 above the floor
+      const float below_limit = -std::max (kFloorClearlyBelow, 3.f * params.floor_distance);
+      std::size_t below = 0;
+      for (const auto i : *sample)
+        below += plane.head<3> ().dot ((*cloud)[i].getVector3fMap ()) + plane[3] < below_limit;
+      if (below * 4 > inliers.indices.size ())
       {
-        Eigen::Vector4f plane (coefficients.values[0], coefficients.values[1], coefficients.values[2],
-                               coefficients.values[3]);
-        plane /= plane.head<3> ().norm ();
-        if (plane.head<3> ().dot (params.up) < 0.f)
-          plane = -plane;  // normal points up: signed distance > 0 above the floor
-        result.floor_found = true;
-        result.floor_plane = plane;
-        for (auto &p : cloud->points)
-          if (std::isfinite (p.z) && plane.head<3> ().dot (p.getVector3fMap ()) + plane[3] < params.floor_distance)
-            invalidate (p);
+        // Not the floor, which must lie under it: look again among the points below.
+        pcl::IndicesPtr under (new pcl::Indices);
+        for (const auto i : *sample)
+          if (plane.head<3> ().dot ((*cloud)[i].getVector3fMap ()) + plane[3] < -params.floor_distance)
+            under->push_back (i);
+        sample = under;
+        continue;
       }
+      result.floor_found = true;
+      result.floor_plane = plane;
+      for (auto &p : cloud->points)
+        if (std::isfinite (p.z) && plane.head<3> ().dot (p.getVector3fMap ()) + plane[3] < params.floor_distance)
+          invalidate (p);
+      break;
     }
   }
   result.ms.emplace_back ("floor", msSince (start));

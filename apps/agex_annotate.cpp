@@ -22,11 +22,15 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include <algorithm>
+#include <cerrno>
+#include <cstdlib>
+#include <cstring>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <map>
+#include <set>
 
 namespace po = boost::program_options;
 namespace fs = std::filesystem;
@@ -56,14 +60,72 @@ annotatedBox (const agex::ContourAnnotation &annotation)
 
 void
 writeAnnotationOverlay (const std::string &dir, const std::string &name, const cv::Mat &image,
-                        const std::vector<agex::ContourAnnotation> &annotations)
+                        const std::vector<agex::ContourAnnotation> &annotations, const agex::InputFiles &read)
 {
   std::vector<agex::apps::LandmarkedPerson> people;
   for (const auto &a : annotations)
     people.push_back ({a.box, 1.0, a.landmarks});
+  const std::string path = (fs::path (dir) / (fs::path (name).stem ().string () + ".png")).string ();
+  read.checkOutput (path);
   fs::create_directories (dir);
-  agex::apps::writePng ((fs::path (dir) / (fs::path (name).stem ().string () + ".png")).string (),
-                        agex::apps::renderLandmarkOverlay (image, people));
+  agex::apps::writePng (path, agex::apps::renderLandmarkOverlay (image, people));
+}
+
+// Files written into a hidden folder inside their destination and renamed into it on
+// commit (); destroyed uncommitted, the folder and what it holds are removed.
+class StagingDirectory
+{
+public:
+  explicit StagingDirectory (const std::string &destination) : destination_ (destination)
+  {
+    std::string pattern = (fs::path (destination) / ".agex_staging-XXXXXX").string ();
+    if (!::mkdtemp (pattern.data ()))
+      throw std::runtime_error (destination + ": cannot create a staging folder: " + std::strerror (errno));
+    dir_ = pattern;
+  }
+  ~StagingDirectory ()
+  {
+    std::error_code ignored;
+    fs::remove_all (dir_, ignored);
+  }
+  StagingDirectory (const StagingDirectory &) = delete;
+  StagingDirectory &operator= (const StagingDirectory &) = delete;
+
+  /** Where to write the file that will end up at final_path (inside the destination). */
+  std::string path (const std::string &final_path)
+  {
+    staged_.push_back (final_path);
+    return (fs::path (dir_) / fs::path (final_path).filename ()).string ();
+  }
+  void commit ()
+  {
+    for (const std::string &final_path : staged_)
+      fs::rename (fs::path (dir_) / fs::path (final_path).filename (), final_path);
+    staged_.clear ();
+  }
+
+private:
+  std::string destination_, dir_;
+  std::vector<std::string> staged_;
+};
+
+// A COCO bbox [x, y, width, height]; nonsense is refused rather than cast (undefined
+// behaviour for huge values) into a box the dataset readers would reject later.
+cv::Rect
+cocoBox (const nlohmann::json &bbox, const std::string &where)
+{
+  if (!bbox.is_array () || bbox.size () != 4)
+    throw std::runtime_error (where + ": bbox is not [x, y, width, height]");
+  double v[4];
+  for (int i = 0; i < 4; ++i)
+  {
+    v[i] = bbox[i].get<double> ();
+    if (!std::isfinite (v[i]) || std::abs (v[i]) > 1e6)
+      throw std::runtime_error (where + ": bbox " + bbox.dump () + " has a value that is not a pixel coordinate");
+  }
+  if (v[2] < 0 || v[3] < 0)
+    throw std::runtime_error (where + ": bbox " + bbox.dump () + " has a negative size");
+  return cv::Rect (static_cast<int> (v[0]), static_cast<int> (v[1]), static_cast<int> (v[2]), static_cast<int> (v[3]));
 }
 
 struct CommonOptions
@@ -101,7 +163,8 @@ annotateCoco (int argc, char **argv)
     ("only", po::value (&only)->multitoken (), "annotate only these image files (file_name in the JSON)");
   if (!agex::apps::parseCommandLine (argc, argv, options, {}))
     return 0;
-  agex::checkOutputIsNotInput (common.out, {json_path});
+  agex::InputFiles read ({json_path});
+  read.checkOutput (common.out);
 
   std::ifstream in (json_path);
   if (!in)
@@ -115,72 +178,98 @@ annotateCoco (int argc, char **argv)
   {
     throw std::runtime_error (json_path + ": not valid JSON (" + std::string (e.what ()) + ")");
   }
-  if (!coco.contains ("images") || !coco.contains ("annotations"))
+  if (!coco.is_object () || !coco.contains ("images") || !coco.contains ("annotations"))
     throw std::runtime_error (json_path + ": no 'images' or 'annotations' (not a COCO file)");
-  std::map<long, std::vector<const nlohmann::json *>> by_image;
-  for (const auto &a : coco["annotations"])
-    by_image[a.value ("image_id", -1L)].push_back (&a);
+  if (!coco["images"].is_array () || !coco["annotations"].is_array ())
+    throw std::runtime_error (json_path + ": 'images' and 'annotations' must be arrays");
 
   agex::ImglabDataset dataset;
   dataset.name = common.name;
   dataset.comment = "agex_annotate coco from " + json_path;
   std::size_t annotated = 0, ignored = 0;
-  for (const auto &entry : coco["images"])
+  // Where in the JSON we are, so that a malformed entry is reported with its place.
+  std::string where = "'images'";
+  try
   {
-    const std::string file = entry.at ("file_name").get<std::string> ();
-    if (!only.empty () && std::find (only.begin (), only.end (), file) == only.end ())
-      continue;
-    const std::string path = (fs::path (images_dir) / file).string ();
-    const cv::Mat image = cv::imread (path, cv::IMREAD_COLOR);
-    if (image.empty ())
-      throw std::runtime_error (path + ": cannot read the image named in " + json_path);
-    agex::ImglabImage out_image;
-    out_image.file = pathFromXml (common.out, path);
-    std::vector<agex::ContourAnnotation> drawn;
-    for (const nlohmann::json *a : by_image[entry.at ("id").get<long> ()])
+    std::map<long, std::vector<const nlohmann::json *>> by_image;
+    for (const auto &a : coco["annotations"])
     {
-      const auto &bbox = a->at ("bbox");
-      const cv::Rect coco_box (cv::Point (static_cast<int> (bbox[0].get<double> ()), static_cast<int> (bbox[1].get<double> ())),
-                               cv::Size (static_cast<int> (bbox[2].get<double> ()), static_cast<int> (bbox[3].get<double> ())));
-      agex::ImglabBox ignore_box{agex::squareBox (coco_box), "person", true, {}};
-      const bool polygons = a->contains ("segmentation") && (*a)["segmentation"].is_array ();
-      if (a->value ("iscrowd", 0) != 0 || !polygons || coco_box.height < common.min_height ||
-          a->value ("num_keypoints", 0) < min_keypoints)
-      {
-        out_image.boxes.push_back (ignore_box);
-        ++ignored;
-        continue;
-      }
-      const auto polygon_list = (*a)["segmentation"].get<std::vector<std::vector<float>>> ();
-      std::vector<cv::Point3f> keypoints;
-      if (a->contains ("keypoints"))
-      {
-        const auto k = (*a)["keypoints"].get<std::vector<float>> ();
-        for (std::size_t i = 0; i + 2 < k.size (); i += 3)
-          keypoints.emplace_back (k[i], k[i + 1], k[i + 2]);
-      }
-      const agex::ContourAnnotation annotation = agex::annotateContour (
-        agex::maskFromPolygons (image.size (), polygon_list), agex::anchorsFromCocoKeypoints (keypoints));
-      if (!annotation.ok)
-      {
-        std::cerr << "agex_annotate: " << file << ": person " << a->value ("id", 0L) << " skipped: " << annotation.problem
-                  << "\n";
-        out_image.boxes.push_back (ignore_box);
-        ++ignored;
-        continue;
-      }
-      agex::ImglabBox box = annotatedBox (annotation);
-      // Shoulders (COCO 5 and 6) give the seed's error scale.
-      if (keypoints.size () == 17 && keypoints[5].z > 0 && keypoints[6].z > 0)
-        for (int s = 0; s < 2; ++s)
-          box.parts[agex::apps::kShoulderPartNames[s]] = cv::Point2f (keypoints[5 + s].x, keypoints[5 + s].y);
-      out_image.boxes.push_back (box);
-      drawn.push_back (annotation);
-      ++annotated;
+      where = "annotation " + a.value ("id", nlohmann::json (-1)).dump ();
+      by_image[a.at ("image_id").get<long> ()].push_back (&a);
     }
-    if (!common.overlay_dir.empty ())
-      writeAnnotationOverlay (common.overlay_dir, file, image, drawn);
-    dataset.images.push_back (std::move (out_image));
+    // Every image the JSON names is an input: no output may land on one.
+    std::set<std::string> named;
+    for (const auto &entry : coco["images"])
+    {
+      where = "image " + entry.value ("id", nlohmann::json (-1)).dump ();
+      const std::string file = entry.at ("file_name").get<std::string> ();
+      named.insert (file);
+      read.add ((fs::path (images_dir) / file).string ());
+    }
+    read.checkOutput (common.out);
+    for (const std::string &file : only)
+      if (!named.count (file))
+        throw std::runtime_error ("--only " + file + ": no image with that file_name in " + json_path);
+
+    for (const auto &entry : coco["images"])
+    {
+      const std::string file = entry.at ("file_name").get<std::string> ();
+      where = "image " + file;
+      if (!only.empty () && std::find (only.begin (), only.end (), file) == only.end ())
+        continue;
+      const std::string path = (fs::path (images_dir) / file).string ();
+      const cv::Mat image = agex::apps::readImage (path, cv::IMREAD_COLOR, "the image named in " + json_path);
+      agex::ImglabImage out_image;
+      out_image.file = pathFromXml (common.out, path);
+      std::vector<agex::ContourAnnotation> drawn;
+      for (const nlohmann::json *a : by_image[entry.at ("id").get<long> ()])
+      {
+        where = "annotation " + a->value ("id", nlohmann::json (-1)).dump () + " of image " + file;
+        const cv::Rect coco_box = cocoBox (a->at ("bbox"), json_path + ": " + where);
+        agex::ImglabBox ignore_box{agex::squareBox (coco_box), "person", true, {}};
+        const bool polygons = a->contains ("segmentation") && (*a)["segmentation"].is_array ();
+        if (a->value ("iscrowd", 0) != 0 || !polygons || coco_box.height < common.min_height ||
+            a->value ("num_keypoints", 0) < min_keypoints)
+        {
+          out_image.boxes.push_back (ignore_box);
+          ++ignored;
+          continue;
+        }
+        const auto polygon_list = (*a)["segmentation"].get<std::vector<std::vector<float>>> ();
+        std::vector<cv::Point3f> keypoints;
+        if (a->contains ("keypoints"))
+        {
+          const auto k = (*a)["keypoints"].get<std::vector<float>> ();
+          for (std::size_t i = 0; i + 2 < k.size (); i += 3)
+            keypoints.emplace_back (k[i], k[i + 1], k[i + 2]);
+        }
+        const agex::ContourAnnotation annotation = agex::annotateContour (
+          agex::maskFromPolygons (image.size (), polygon_list), agex::anchorsFromCocoKeypoints (keypoints));
+        if (!annotation.ok)
+        {
+          std::cerr << "agex_annotate: " << file << ": person " << a->value ("id", 0L) << " skipped: " << annotation.problem
+                    << "\n";
+          out_image.boxes.push_back (ignore_box);
+          ++ignored;
+          continue;
+        }
+        agex::ImglabBox box = annotatedBox (annotation);
+        // Shoulders (COCO 5 and 6) give the seed's error scale.
+        if (keypoints.size () == 17 && keypoints[5].z > 0 && keypoints[6].z > 0)
+          for (int s = 0; s < 2; ++s)
+            box.parts[agex::apps::kShoulderPartNames[s]] = cv::Point2f (keypoints[5 + s].x, keypoints[5 + s].y);
+        out_image.boxes.push_back (box);
+        drawn.push_back (annotation);
+        ++annotated;
+      }
+      if (!common.overlay_dir.empty ())
+        writeAnnotationOverlay (common.overlay_dir, file, image, drawn, read);
+      dataset.images.push_back (std::move (out_image));
+    }
+  }
+  catch (const nlohmann::json::exception &e)
+  {
+    throw std::runtime_error (json_path + ": " + where + ": " + e.what ());
   }
   agex::writeImglabDataset (common.out, dataset);
   std::cout << common.out << ": " << dataset.images.size () << " images, " << annotated << " people annotated, "
@@ -225,17 +314,41 @@ annotateRgbd (int argc, char **argv)
   if (inputs.empty ())
     throw std::runtime_error ("no INPUT cloud given (see --help)");
   agex::apps::finishPipelineOptions (vector_flags, params);
-  agex::checkOutputIsNotInput (common.out, inputs);
+  agex::InputFiles read (inputs);
+  read.checkOutput (common.out);
   if (images_dir.empty ())
     images_dir = (fs::path (common.out).parent_path () / (fs::path (common.out).stem ().string () + "_images")).string ();
+  // One image per input, named after it; inputs of the same name (frames/000000.pcd of two
+  // agex_synth runs) get a numbered suffix instead of overwriting each other.
+  std::vector<std::string> pngs;
+  {
+    std::set<std::string> taken;
+    for (const std::string &input : inputs)
+    {
+      const std::string stem = fs::path (input).stem ().string ();
+      std::string name = stem + ".png";
+      for (int n = 2; !taken.insert (name).second; ++n)
+        name = stem + "-" + std::to_string (n) + ".png";
+      pngs.push_back ((fs::path (images_dir) / name).string ());
+      read.checkOutput (pngs.back ());
+    }
+  }
+  // Overlays must not land on the dataset's own images either.
+  agex::InputFiles protected_files = read;
+  for (const std::string &png : pngs)
+    protected_files.add (png);
   fs::create_directories (images_dir);
+  // The images are staged and moved into place only once every frame has worked, so a failed
+  // run leaves an earlier dataset's images as they were.
+  StagingDirectory staging (images_dir);
 
   agex::ImglabDataset dataset;
   dataset.name = common.name;
   dataset.comment = "agex_annotate rgbd";
   std::size_t annotated = 0;
-  for (const std::string &input : inputs)
+  for (std::size_t f = 0; f < inputs.size (); ++f)
   {
+    const std::string &input = inputs[f];
     const pcl::PCLPointCloud2 blob = agex::readPcd (input);  // FrameError names the file and the problem
     bool has_colour = false;
     for (const auto &field : blob.fields)
@@ -314,15 +427,14 @@ annotateRgbd (int argc, char **argv)
       drawn.push_back (annotation);
       ++annotated;
     }
-    const std::string png = (fs::path (images_dir) / (fs::path (input).stem ().string () + ".png")).string ();
-    agex::checkOutputIsNotInput (png, inputs);
-    agex::apps::writePng (png, colour);
-    image.file = pathFromXml (common.out, png);
+    agex::apps::writePng (staging.path (pngs[f]), colour);
+    image.file = pathFromXml (common.out, pngs[f]);
     if (!common.overlay_dir.empty ())
-      writeAnnotationOverlay (common.overlay_dir, png, colour, drawn);
+      writeAnnotationOverlay (common.overlay_dir, pngs[f], colour, drawn, protected_files);
     std::cout << input << ": " << result.meshes.size () << " meshes, " << drawn.size () << " people annotated\n";
     dataset.images.push_back (std::move (image));
   }
+  staging.commit ();
   agex::writeImglabDataset (common.out, dataset);
   std::cout << common.out << ": " << dataset.images.size () << " images, " << annotated << " people annotated\n";
   return 0;

@@ -203,14 +203,10 @@ benchDataset (const std::string &spec, bool keyframes_only, const std::string &m
   // Throughput: every frame once, spread over the threads.
   std::atomic<std::size_t> next{0};
   const auto start = Clock::now ();
-  std::vector<std::thread> threads;
-  for (int t = 0; t < jobs; ++t)
-    threads.emplace_back ([&] () {
-      for (std::size_t i = next++; i < clouds.size (); i = next++)
-        timeDetector (clouds[i], classifier, settings);
-    });
-  for (auto &t : threads)
-    t.join ();
+  jobs = agex::apps::runWorkers (jobs, clouds.size (), [&] () {
+    for (std::size_t i = next++; i < clouds.size (); i = next++)
+      timeDetector (clouds[i], classifier, settings);
+  });
   const double seconds = std::chrono::duration<double> (Clock::now () - start).count ();
   const double fps = seconds > 0 ? clouds.size () / seconds : 0.0;
   std::printf ("  throughput     %8.1f frames/s with %d job%s (%u hardware threads)\n", fps, jobs,
@@ -266,12 +262,18 @@ main (int argc, char **argv)
     agex::apps::finishPipelineOptions (vector_flags, params);
     if (k < 1 || repeat < 1 || passes < 1 || jobs < 1)
       throw std::runtime_error ("--bench-k, --repeat, --passes and --jobs must be at least 1");
+    if (k > 1000)
+      throw std::runtime_error ("--bench-k must be at most 1000 (the naive reference runs a full Dijkstra per point)");
     if (!dataset_spec.empty ())
     {
       if (!inputs.empty ())
         throw std::runtime_error ("give either frame files or --dataset, not both");
       if (!json_path.empty ())
-        agex::checkOutputIsNotInput (json_path, {model_path});
+      {
+        agex::InputFiles read (agex::apps::datasetFiles (agex::apps::selectDataset (dataset_spec, false).dataset));
+        read.add (model_path);
+        read.checkOutput (json_path);
+      }
       const nlohmann::json doc = benchDataset (dataset_spec, keyframes_only, model_path, passes, jobs);
       if (!json_path.empty ())
         agex::apps::writeJson (json_path, doc);
@@ -280,7 +282,11 @@ main (int argc, char **argv)
     if (inputs.empty ())
       inputs.push_back (AGEX_BUNDLED_FRAME);
     if (!json_path.empty ())
-      agex::checkOutputIsNotInput (json_path, inputs);
+    {
+      std::vector<std::string> read = inputs;
+      read.push_back (model_path);
+      agex::checkOutputIsNotInput (json_path, read);
+    }
 
     nlohmann::json doc;
     doc["k"] = k;

@@ -18,13 +18,18 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include <algorithm>
 #include <atomic>
+#include <cctype>
+#include <cerrno>
 #include <chrono>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <iterator>
 #include <mutex>
 #include <set>
+#include <cstring>
 #include <thread>
 
 #include <fcntl.h>
@@ -41,64 +46,104 @@ struct Job
   std::string path;  ///< file to load
 };
 
+bool
+isFrameFile (const fs::path &path)
+{
+  std::string ext = path.extension ().string ();
+  std::transform (ext.begin (), ext.end (), ext.begin (), [] (unsigned char c) { return std::tolower (c); });
+  return ext == ".pcd" || ext == ".png" || ext == ".u16";
+}
+
+/** The frames to process, each once, named by its normalised path (so that "d", "./d" and
+  * "d/" name the same frames on a rerun); read gets every file they come from. */
 std::vector<Job>
-collectJobs (const std::vector<std::string> &inputs)
+collectJobs (const std::vector<std::string> &inputs, agex::InputFiles &read)
 {
   std::vector<Job> jobs;
+  std::set<std::string> named;
+  auto add = [&] (const fs::path &name, const std::string &path) {
+    const std::string normal = name.lexically_normal ().string ();
+    if (named.insert (normal).second)
+      jobs.push_back ({normal, path});
+    read.add (path);
+  };
   for (const auto &input : inputs)
   {
+    const std::size_t before = jobs.size ();
     if (fs::is_directory (input) && fs::exists (fs::path (input) / "dataset.json"))
     {
       const agex::Dataset dataset = agex::Dataset::read (input);
+      read.add ((fs::path (input) / "dataset.json").string ());
+      read.add ((fs::path (input) / "labels.csv").string ());
       for (const auto &frame : dataset.frames ())
-        jobs.push_back ({input + "/" + frame.id, dataset.framePath (frame.id)});
+        add (fs::path (input) / frame.id, dataset.framePath (frame.id));
     }
     else if (fs::is_directory (input))
     {
       std::vector<std::string> files;
       for (const auto &entry : fs::directory_iterator (input))
-      {
-        const std::string ext = entry.path ().extension ().string ();
-        if (entry.is_regular_file () && (ext == ".pcd" || ext == ".png" || ext == ".u16"))
+        if (entry.is_regular_file () && isFrameFile (entry.path ()))
           files.push_back (entry.path ().string ());
-      }
       std::sort (files.begin (), files.end ());
       for (const auto &f : files)
-        jobs.push_back ({f, f});
+        add (f, f);
+      if (files.empty ())
+        throw std::runtime_error (input + ": no frames (.pcd, .png, .u16) in this directory");
     }
     else if (fs::exists (input))
-      jobs.push_back ({input, input});
+      add (input, input);
     else
       throw std::runtime_error (input + ": no such file or directory");
+    if (jobs.size () == before && !fs::is_directory (input))
+      std::cerr << "agex_detect: " << input << " is given twice; processed once\n";
   }
   return jobs;
 }
 
-/** Frames already in a JSON-lines file; a torn last line (an interrupted run) is dropped
-  * by rewriting the file without it, atomically. */
+/** Frames already in a JSON-lines file of an earlier run. Only the last line may be torn
+  * (a run interrupted while writing it): it is dropped, and a missing final newline added,
+  * by rewriting the file atomically. Anything else that is not one of our lines means the
+  * file is not ours, and it is left alone. */
 std::set<std::string>
 framesDone (const std::string &path)
 {
   std::set<std::string> done;
-  std::ifstream in (path);
+  std::ifstream in (path, std::ios::binary);
   if (!in)
     return done;
-  std::string line, kept;
-  bool torn = false;
-  while (std::getline (in, line))
+  const std::string content ((std::istreambuf_iterator<char> (in)), std::istreambuf_iterator<char> ());
+  std::string kept;
+  std::size_t line_number = 0;
+  bool rewrite = false;
+  for (std::size_t begin = 0; begin < content.size ();)
   {
+    std::size_t end = content.find ('\n', begin);
+    const bool last = end == std::string::npos;
+    if (last)
+      end = content.size ();
+    const std::string line = content.substr (begin, end - begin);
+    begin = end + 1;
+    ++line_number;
+    if (line.empty ())
+      continue;
     try
     {
       const auto doc = nlohmann::json::parse (line);
       done.insert (doc.at ("frame").get<std::string> ());
       kept += line + "\n";
+      rewrite = rewrite || last;  // the final newline was missing
     }
     catch (const std::exception &)
     {
-      torn = true;
+      // Our lines are JSON objects: a torn one still starts like one.
+      if (!last || line[0] != '{')
+        throw std::runtime_error (path + ": line " + std::to_string (line_number) +
+                                  " is not a frame result of agex_detect; --json of several frames appends "
+                                  "to a JSON-lines file: choose a new path or that of an earlier such run");
+      rewrite = true;  // torn by an interrupted run
     }
   }
-  if (torn)
+  if (rewrite)
     agex::writeFileAtomic (path, kept);
   return done;
 }
@@ -164,13 +209,11 @@ main (int argc, char **argv)
     const agex::apps::DetectorModel model = agex::apps::loadDetectorModel (model_path, agex::apps::DetectorKind::Agex);
     const agex::PatchClassifier &classifier = *model.classifier;
     const agex::apps::DetectorSettings &settings = model.settings;
-    const std::vector<Job> job_list = collectJobs (inputs);
-    std::vector<std::string> input_files;
-    for (const auto &j : job_list)
-      input_files.push_back (j.path);
+    agex::InputFiles read ({model_path});
+    const std::vector<Job> job_list = collectJobs (inputs, read);
     for (const auto &out : {json_path, overlay_path})
       if (!out.empty ())
-        agex::checkOutputIsNotInput (out, input_files);
+        read.checkOutput (out);
 
     auto process = [&] (const Job &job, nlohmann::json &doc, cv::Mat *overlay) {
       const auto start = std::chrono::steady_clock::now ();
@@ -193,7 +236,7 @@ main (int argc, char **argv)
         *overlay = renderDetections (prepared, *frame.cloud, detections, min_confidence);
     };
 
-    if (job_list.size () == 1 && fs::is_regular_file (inputs[0]))
+    if (inputs.size () == 1 && fs::is_regular_file (inputs[0]))
     {
       nlohmann::json doc;
       cv::Mat overlay;
@@ -226,14 +269,16 @@ main (int argc, char **argv)
     {
       fd = ::open (json_path.c_str (), O_WRONLY | O_CREAT | O_APPEND, 0644);
       if (fd < 0)
-        throw std::runtime_error (json_path + ": cannot open for appending");
+        throw std::runtime_error (json_path + ": cannot open for appending: " + std::strerror (errno));
     }
     std::mutex output_mutex;
     std::atomic<std::size_t> next{0}, finished{0};
     std::string first_error;
     agex::apps::Progress progress ("frames", todo.size ());
+    std::atomic<bool> failed{false};
     auto worker = [&] () {
-      for (std::size_t i = next++; i < todo.size (); i = next++)
+      // After a failure no new frame is started; those in flight finish.
+      for (std::size_t i = next++; i < todo.size () && !failed; i = next++)
       {
         nlohmann::json doc;
         try
@@ -245,6 +290,7 @@ main (int argc, char **argv)
           std::lock_guard<std::mutex> lock (output_mutex);
           if (first_error.empty ())
             first_error = e.what ();
+          failed = true;
           continue;
         }
         // One write per line: lines of parallel workers never interleave.
@@ -255,15 +301,13 @@ main (int argc, char **argv)
         progress.step (++finished);
       }
     };
-    std::vector<std::thread> threads;
-    for (int t = 0; t < jobs; ++t)
-      threads.emplace_back (worker);
-    for (auto &t : threads)
-      t.join ();
+    agex::apps::runWorkers (jobs, todo.size (), worker);
     if (fd != 1)
       ::close (fd);
     if (!first_error.empty ())
-      throw std::runtime_error (first_error + " (frames done so far are kept; rerun to continue)");
+      throw std::runtime_error (first_error + (json_path.empty () ? std::string ()
+                                                                  : " (the frames done are kept in " + json_path +
+                                                                      "; fix or remove that frame and rerun to go on)"));
     return 0;
   }
   catch (const std::exception &e)

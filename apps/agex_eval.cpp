@@ -399,6 +399,8 @@ main (int argc, char **argv)
       throw std::runtime_error ("--dataset is required (see --help)");
     if (k < 1 || !(radius > 0.f))
       throw std::runtime_error ("--k must be at least 1 and --radius positive");
+    if (!plots_dir.empty () && std::filesystem::exists (plots_dir) && !std::filesystem::is_directory (plots_dir))
+      throw std::runtime_error ("--plots " + plots_dir + ": a file, not a directory");
     if (mode == "compare")
     {
       if (!(min_iou > 0.f && min_iou < 1.f))
@@ -407,23 +409,30 @@ main (int argc, char **argv)
                                                      [] (float s) { return !(s > 0.f) || !std::isfinite (s); }))
         throw std::runtime_error ("--window-stride must be positive and --window-scales finite and positive");
       const auto selection = agex::apps::selectDataset (dataset_dir, keyframes);
+      agex::InputFiles read (agex::apps::datasetFiles (selection.dataset));
+      read.add (agex_model_path);
+      read.add (sw_model_path);
       if (!json_path.empty ())
-        agex::checkOutputIsNotInput (json_path, {agex_model_path, sw_model_path,
-                                                 selection.dataset.directory () + "/dataset.json",
-                                                 selection.dataset.directory () + "/labels.csv"});
+        read.checkOutput (json_path);
       return compareDetectors (selection, agex_model_path, sw_model_path, window_override, radius, min_iou, json_path,
                                plots_dir);
     }
     if (mode == "detect")
-      return evaluateDetection (agex::apps::selectDataset (dataset_dir, keyframes), model_path, radius, json_path,
-                                plots_dir);
+    {
+      auto selection = agex::apps::selectDataset (dataset_dir, keyframes);
+      agex::InputFiles read (agex::apps::datasetFiles (selection.dataset));
+      read.add (model_path);
+      if (!json_path.empty ())
+        read.checkOutput (json_path);
+      return evaluateDetection (std::move (selection), model_path, radius, json_path, plots_dir);
+    }
     if (mode == "coverage")
     {
       const agex::apps::DatasetSelection selection = agex::apps::selectDataset (dataset_dir, keyframes);
-      const std::string &dir = selection.dataset.directory ();
+      const agex::InputFiles read (agex::apps::datasetFiles (selection.dataset));
       for (const auto &out : {json_path, plot_path})
         if (!out.empty ())
-          agex::checkOutputIsNotInput (out, {dir + "/dataset.json", dir + "/labels.csv"});
+          read.checkOutput (out);
       return evaluateCoverage (selection, params, k, radius, keyframes, details, json_path, plot_path);
     }
     throw std::runtime_error ("unknown mode '" + mode + "' (expected coverage, detect or compare)");

@@ -67,7 +67,8 @@ main (int argc, char **argv)
       agex::apps::writePng (overlay_path,
                             agex::apps::renderOverlay (*frame.cloud, result.meshes, result.interest_points));
 
-    std::cout << input << ": " << result.meshes.size () << " meshes, " << result.interest_points.size ()
+    // The summary goes to standard error: without --json, standard output is the JSON alone.
+    std::cerr << input << ": " << result.meshes.size () << " meshes, " << result.interest_points.size ()
               << " interest points, " << result.ms.back ().second << " ms\n";
     if (json_path.empty ())
       std::cout << doc.dump (2) << "\n";

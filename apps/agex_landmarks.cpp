@@ -13,6 +13,9 @@
 #include <opencv2/videoio.hpp>
 
 #include <algorithm>
+#include <cctype>
+#include <filesystem>
+#include <regex>
 #include <chrono>
 #include <csignal>
 #include <iostream>
@@ -67,6 +70,35 @@ stopReading (int)
   interrupted = 1;
   std::signal (SIGINT, SIG_DFL);  // a second Ctrl-C ends a read that blocks
 }
+// An image-sequence video (frames/f%03d.png) reads every file its pattern matches; the
+// overlay must not be one of them.
+void
+checkNotInImageSequence (const std::string &overlay, const std::string &video)
+{
+  namespace fs = std::filesystem;
+  if (video.find ('%') == std::string::npos)
+    return;
+  std::string pattern;
+  const std::string name = fs::path (video).filename ().string ();
+  for (std::size_t i = 0; i < name.size (); ++i)
+  {
+    std::size_t j = i + 1;
+    while (name[i] == '%' && j < name.size () && std::isdigit (static_cast<unsigned char> (name[j])))
+      ++j;
+    if (name[i] == '%' && j < name.size () && name[j] == 'd')
+    {
+      pattern += "[0-9]+";
+      i = j;
+    }
+    else
+      pattern += std::isalnum (static_cast<unsigned char> (name[i])) ? std::string (1, name[i]) : "\\" + std::string (1, name[i]);
+  }
+  std::error_code ec;
+  const fs::path out = fs::weakly_canonical (overlay, ec), dir = fs::weakly_canonical (fs::path (video).parent_path ().empty () ? "." : fs::path (video).parent_path (), ec);
+  if (out.parent_path () == dir && std::regex_match (out.filename ().string (), std::regex (pattern)))
+    throw std::runtime_error (overlay + ": output would overwrite a frame of the image sequence " + video +
+                              "; choose another path");
+}
 }  // namespace
 
 int
@@ -102,6 +134,17 @@ main (int argc, char **argv)
       throw std::runtime_error ("no INPUT image or --video given (see --help)");
     if (!(opencv_scale > 0.05 && opencv_scale <= 4.0))
       throw std::runtime_error ("--opencv-scale must lie in (0.05, 4]");
+    if (!detector_path.empty () && opencv_scale != 0.5)
+      throw std::runtime_error ("--opencv-scale applies to OpenCV's detector only, not to --detector");
+    if (repeat < 1)
+      throw std::runtime_error ("--repeat must be at least 1");
+    if (max_frames < 0)
+      throw std::runtime_error ("--max-frames must be 0 (all) or more");
+    const bool camera = !video.empty () && std::all_of (video.begin (), video.end (), ::isdigit);
+    if (camera && video.size () > 4)
+      throw std::runtime_error ("--video " + video + ": no such camera number");
+    if (!overlay_path.empty () && !camera)
+      checkNotInImageSequence (overlay_path, video);
     std::vector<std::string> read = inputs;
     read.push_back (model_path);
     if (!video.empty ())
@@ -109,7 +152,7 @@ main (int argc, char **argv)
     for (const auto &out : {json_path, overlay_path})
       if (!out.empty ())
         agex::checkOutputIsNotInput (out, read);
-    const agex::ContourShapePredictor predictor = agex::ContourShapePredictor::load (model_path);
+    const agex::ContourShapePredictor predictor = agex::apps::loadContourModel (model_path);
     const agex::PeopleDetector detector =
       detector_path.empty () ? agex::PeopleDetector::openCvDefault (opencv_scale) : agex::PeopleDetector::load (detector_path);
 
@@ -125,9 +168,7 @@ main (int argc, char **argv)
     };
     for (const std::string &input : inputs)
     {
-      const cv::Mat image = cv::imread (input, cv::IMREAD_COLOR);
-      if (image.empty ())
-        throw std::runtime_error (input + ": cannot read the image");
+      const cv::Mat image = agex::apps::readImage (input, cv::IMREAD_COLOR);
       FrameResult best = processFrame (image, detector, predictor, threshold);
       for (int r = 1; r < repeat; ++r)
       {
@@ -140,7 +181,6 @@ main (int argc, char **argv)
     if (!video.empty ())
     {
       cv::VideoCapture capture;
-      const bool camera = !video.empty () && std::all_of (video.begin (), video.end (), ::isdigit);
       // OpenCV logs each backend that fails to open the input; the one error below says it.
       const auto log_level = cv::utils::logging::setLogLevel (cv::utils::logging::LOG_LEVEL_SILENT);
       const bool opened = camera ? capture.open (std::stoi (video)) : capture.open (video);
@@ -149,8 +189,11 @@ main (int argc, char **argv)
         throw std::runtime_error (video + ": cannot open the video or camera");
       std::signal (SIGINT, stopReading);
       cv::Mat frame;
-      for (int n = 0; !interrupted && (max_frames == 0 || n < max_frames) && capture.read (frame) && !frame.empty (); ++n)
+      int n = 0;
+      for (; !interrupted && (max_frames == 0 || n < max_frames) && capture.read (frame) && !frame.empty (); ++n)
         report (video + "#" + std::to_string (n), frame.clone (), processFrame (frame, detector, predictor, threshold));
+      if (n == 0 && !interrupted)
+        throw std::runtime_error (video + ": opened, but not a single frame could be read from it");
     }
     nlohmann::json doc = {{"model", model_path}, {"detector", detector.description ()}, {"frames", frames}};
     if (!json_path.empty ())

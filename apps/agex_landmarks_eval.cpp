@@ -58,18 +58,31 @@ main (int argc, char **argv)
       throw std::runtime_error ("--folds needs at least 2 folds");
     if (!(opencv_scale > 0.05 && opencv_scale <= 4.0))
       throw std::runtime_error ("--opencv-scale must lie in (0.05, 4]");
+    if (!detector_path.empty () && opencv_scale != 0.5)
+      throw std::runtime_error ("--opencv-scale applies to OpenCV's detector only, not to --detector");
+    if (folds == 0 && (!extra_paths.empty () || train_detector))
+      throw std::runtime_error ("--train-also and --train-detector need --folds");
+    if (folds > 0 && !model_path.empty ())
+      throw std::runtime_error ("--folds trains a model per fold; --model is not used with it");
+    agex::InputFiles read (dataset_paths);
+    for (const auto &path : extra_paths)
+      read.add (path);
+    for (const auto &path : {model_path, detector_path})
+      if (!path.empty ())
+        read.add (path);
     if (!json_path.empty ())
-    {
-      std::vector<std::string> read = dataset_paths;
-      read.insert (read.end (), {model_path, detector_path});
-      agex::checkOutputIsNotInput (json_path, read);
-    }
+      read.checkOutput (json_path);
     auto images = agex::apps::loadLandmarkDatasets (dataset_paths);
     const std::size_t tested_images = images.size ();
     {
       std::vector<agex::apps::AnnotatedImage> extra = agex::apps::loadLandmarkDatasets (extra_paths);
       std::move (extra.begin (), extra.end (), std::back_inserter (images));
     }
+    // No output may land on an image the datasets name either.
+    for (const auto &image : images)
+      read.add (image.path);
+    if (!json_path.empty ())
+      read.checkOutput (json_path);
     if (folds > static_cast<int> (tested_images))
       throw std::runtime_error ("the dataset has " + std::to_string (tested_images) + " images, fewer than " +
                                 std::to_string (folds) + " folds");
@@ -89,9 +102,11 @@ main (int argc, char **argv)
           std::vector<agex::apps::LandmarkedPerson> people;
           for (const auto &person : images[i].people)
             people.push_back ({person.box, 1.0, predictor.predict (images[i].grey, person.box)});
+          const std::string overlay = overlay_dir + "/" + std::filesystem::path (images[i].path).stem ().string () + ".png";
+          read.checkOutput (overlay);
           std::filesystem::create_directories (overlay_dir);
-          agex::apps::writePng (overlay_dir + "/" + std::filesystem::path (images[i].path).stem ().string () + ".png",
-                                agex::apps::renderLandmarkOverlay (cv::imread (images[i].path), people));
+          agex::apps::writePng (overlay, agex::apps::renderLandmarkOverlay (
+                                           agex::apps::readImage (images[i].path, cv::IMREAD_COLOR), people));
         }
       }
       return fold.json ();
@@ -104,7 +119,7 @@ main (int argc, char **argv)
 
     if (folds == 0)
     {
-      const agex::ContourShapePredictor predictor = agex::ContourShapePredictor::load (model_path);
+      const agex::ContourShapePredictor predictor = agex::apps::loadContourModel (model_path);
       std::vector<std::size_t> test (tested_images);
       std::iota (test.begin (), test.end (), 0);
       evaluate (predictor, given_detector.get (), test);

@@ -8,6 +8,7 @@
 #include <boost/program_options.hpp>
 
 #include <chrono>
+#include <filesystem>
 #include <iostream>
 #include <numeric>
 
@@ -32,14 +33,21 @@ main (int argc, char **argv)
   {
     if (!agex::apps::parseCommandLine (argc, argv, all, {}))
       return 0;
-    agex::checkOutputIsNotInput (model_path, dataset_paths);
+    agex::InputFiles read (dataset_paths);
+    read.checkOutput (model_path);
     if (!detector_path.empty ())
     {
-      std::vector<std::string> read = dataset_paths;
-      read.push_back (model_path);
-      agex::checkOutputIsNotInput (detector_path, read);
+      if (std::filesystem::weakly_canonical (detector_path) == std::filesystem::weakly_canonical (model_path))
+        throw std::runtime_error (detector_path + ": --detector-out and --out name the same file");
+      read.checkOutput (detector_path);
     }
     const auto images = agex::apps::loadLandmarkDatasets (dataset_paths);
+    // Nor on an image the datasets name.
+    for (const auto &image : images)
+      read.add (image.path);
+    for (const auto &out : {model_path, detector_path})
+      if (!out.empty ())
+        read.checkOutput (out);
     std::vector<std::size_t> all_images (images.size ());
     std::iota (all_images.begin (), all_images.end (), 0);
     std::size_t people = 0;

@@ -15,6 +15,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <filesystem>
 #include <iostream>
 #include <sstream>
 
@@ -83,6 +84,22 @@ main (int argc, char **argv)
         window_negatives < 0 || jitter < 0)
       throw std::runtime_error ("--window-stride must be at least 1, --window-scales positive, "
                                 "--window-negatives and --jitter not negative");
+    if (!(radius > 0.f) || random_negatives < 0 || classifier_params.weak_count < 1 ||
+        classifier_params.dictionary.fragments_per_class < 1)
+      throw std::runtime_error ("--radius must be positive, --random-negatives not negative, "
+                                "--weak-count and --fragments at least 1");
+    if (patch.size < 3 || patch.size > 41 || !(patch.extent > 0.f) || !(patch.clamp > 0.f))
+      throw std::runtime_error ("--patch-size must lie in [3, 41], --patch-extent and --patch-clamp be positive");
+    if (std::filesystem::is_directory (out))
+      throw std::runtime_error ("--out " + out + ": a directory, not a model file");
+    // Checked before hours of training: the model must not land on what it is trained from.
+    {
+      agex::InputFiles read;
+      for (const auto &spec : datasets)
+        for (const auto &file : agex::apps::datasetFiles (agex::apps::selectDataset (spec, false).dataset))
+          read.add (file);
+      read.checkOutput (out);
+    }
     classifier_params.dictionary.seed = seed;
     const auto start = std::chrono::steady_clock::now ();
 

@@ -845,6 +845,14 @@ TEST (AtomicFile, OutputMustNotBeAnInput)
   EXPECT_NO_THROW (agex::checkOutputIsNotInput (dir.file ("out.json"), {input}));
   EXPECT_NO_THROW (agex::checkOutputIsNotInput (dir.file ("sub/frame.png"), {input}));
   EXPECT_NO_THROW (agex::checkOutputIsNotInput (input, {}));
+  // Files that do not exist yet, spelled relative and differently (an image an app is about
+  // to write, and an overlay aimed at it): weakly_canonical alone would keep them relative.
+  agex::InputFiles planned ({"agex_not_there_yet/./images/a.png"});
+  EXPECT_THROW (planned.checkOutput ((fs::current_path () / "agex_not_there_yet/images/a.png").string ()),
+                std::runtime_error);
+  EXPECT_THROW (planned.checkOutput ("agex_not_there_yet/images/../images/a.png"), std::runtime_error);
+  EXPECT_THROW (planned.checkOutput ("agex_not_there_yet"), std::runtime_error);  // holds it
+  EXPECT_NO_THROW (planned.checkOutput ("agex_not_there_yet/images/b.png"));
 }
 
 // ---------------------------------------------------------------------------

@@ -17,6 +17,8 @@
 
 #include <random>
 
+#include <sys/wait.h>
+
 namespace
 {
 using agex_test::readAll;
@@ -166,6 +168,12 @@ TEST (ImglabDataset, BadFilesNameTheFileAndTheProblem)
   expect_error ("<dataset><images><image file='a'>", "never closed");
   expect_error ("<dataset><images></image></dataset>", "closes <images>");
   expect_error ("<dataset>\n\n<images><image/></images></dataset>", "line 3");
+  // A person box of no area would wreck a shape predictor's training; an ignore box may be one.
+  expect_error ("<dataset><images><image file='a'><box top='1' left='2' width='0' height='0'/></image></images></dataset>",
+                "zero width or height");
+  writeAll (path, "<dataset><images><image file='a'><box top='1' left='2' width='0' height='0' ignore='1'/>"
+                  "</image></images></dataset>");
+  EXPECT_NO_THROW (agex::readImglabDataset (path));
   EXPECT_THROW (agex::readImglabDataset ((dir / "missing.xml").string ()), std::runtime_error);
   fs::remove_all (dir);
 }
@@ -555,6 +563,85 @@ TEST (LandmarkApps, BundledModelOnBundledImage)
   EXPECT_NE (run (std::string (AGEX_LANDMARKS_EXECUTABLE) + " " + image + " --model " + image), 0);
   fs::remove_all (dir);
 }
+TEST (LandmarkApps, BadImagesAndModelsAreNamedAndOutputsNeverLandOnInputs)
+{
+  const fs::path dir = tempDir ("bad_apps");
+  const std::string app = AGEX_LANDMARKS_EXECUTABLE;
+  auto exit_code = [] (const std::string &command) {
+    const int status = std::system ((command + " > /dev/null 2>&1").c_str ());
+    return WIFEXITED (status) ? WEXITSTATUS (status) : -1;  // -1: killed by a signal
+  };
+  const std::string good = std::string (AGEX_SOURCE_DIR) + "/data/images/five_people.jpg";
+  const std::string jpeg = readAll (good), truncated = (dir / "truncated.jpg").string ();
+  writeAll (truncated, jpeg.substr (0, jpeg.size () / 2));
+  EXPECT_EQ (exit_code (app + " " + good), 0);
+  // OpenCV would decode the first half with grey rows below it and a warning.
+  EXPECT_EQ (exit_code (app + " " + truncated), 1);
+  // Too small for the detector's window: no people, not an error.
+  const std::string tiny = (dir / "tiny.png").string ();
+  ASSERT_TRUE (cv::imwrite (tiny, cv::Mat (1, 1, CV_8UC3, cv::Scalar::all (90))));
+  EXPECT_EQ (exit_code (app + " " + tiny + " --json " + (dir / "tiny.json").string ()), 0);
+  // Damaged dlib models whose indices point outside the model, and one with 5 landmarks.
+  for (const char *model : {"shape_predictor_bad_anchor.dat", "shape_predictor_bad_split.dat",
+                            "shape_predictor_5_landmarks.dat"})
+    EXPECT_EQ (exit_code (app + " " + good + " --model " + AGEX_SOURCE_DIR + "/test/bad_inputs/inputs/" + model), 1)
+      << model;
+  // An image-sequence video: the overlay may not replace one of its frames.
+  std::vector<std::string> frames;
+  for (int n = 0; n < 3; ++n)
+  {
+    frames.push_back ((dir / cv::format ("f%03d.png", n)).string ());
+    ASSERT_TRUE (cv::imwrite (frames.back (), cv::Mat (64, 48, CV_8UC3, cv::Scalar::all (40 * n))));
+  }
+  const std::string before = readAll (frames[1]);
+  EXPECT_EQ (exit_code (app + " --video " + (dir / "f%03d.png").string () + " --overlay " + frames[1]), 1);
+  EXPECT_EQ (readAll (frames[1]), before);
+  EXPECT_EQ (exit_code (app + " --video " + (dir / "f%03d.png").string () + " --overlay " +
+                        (dir / "overlay.png").string ()),
+             0);
+  // A file that opens but yields no frame, and a camera number no camera has.
+  writeAll ((dir / "notes.txt").string (), "not a video");
+  EXPECT_EQ (exit_code (app + " --video " + (dir / "notes.txt").string ()), 1);
+  EXPECT_EQ (exit_code (app + " --video 99999999999"), 1);
+  fs::remove_all (dir);
+}
+
+TEST (LandmarkApps, AnnotationImagesAreStagedAndNeverOverwritten)
+{
+  const std::string pcd = agex_test::sharedData ("kinect/five_people.pcd");
+  AGEX_REQUIRE_SHARED_FILE (pcd, "the RGB-D frame of ../shared/data/kinect");
+  const fs::path dir = tempDir ("rgbd_names");
+  // Two inputs of the same name (frames/000000.pcd of two agex_synth runs) get two images.
+  for (const char *run_dir : {"a", "b"})
+  {
+    fs::create_directories (dir / run_dir);
+    fs::copy_file (pcd, dir / run_dir / "frame.pcd");
+  }
+  const std::string a = (dir / "a" / "frame.pcd").string (), b = (dir / "b" / "frame.pcd").string ();
+  const std::string xml = (dir / "out.xml").string ();
+  ASSERT_EQ (run (std::string (AGEX_ANNOTATE_EXECUTABLE) + " rgbd " + a + " " + b + " --out " + xml), 0);
+  const agex::ImglabDataset d = agex::readImglabDataset (xml);
+  ASSERT_EQ (d.images.size (), 2u);
+  EXPECT_NE (d.images[0].file, d.images[1].file);
+  // A failing run (a damaged second input) leaves the earlier dataset's images as they were,
+  // and no staging folder behind. (The marker stands for an earlier image: both inputs here
+  // render the same picture.)
+  const std::string image = agex::resolveImglabImagePath (xml, d.images[0].file), kept = "an earlier image";
+  writeAll (image, kept);
+  const std::string damaged = (dir / "damaged.pcd").string ();
+  writeAll (damaged, readAll (pcd).substr (0, 3000));
+  EXPECT_NE (run (std::string (AGEX_ANNOTATE_EXECUTABLE) + " rgbd " + b + " " + damaged + " --out " + xml), 0);
+  EXPECT_EQ (readAll (image), kept);
+  for (const auto &entry : fs::directory_iterator (fs::path (image).parent_path ()))
+    EXPECT_EQ (entry.path ().filename ().string ().rfind (".agex_staging", 0), std::string::npos) << entry.path ();
+  // Overlays may not land on the dataset's own images.
+  EXPECT_NE (run (std::string (AGEX_ANNOTATE_EXECUTABLE) + " rgbd " + a + " --out " + xml + " --overlay-dir " +
+                  fs::path (image).parent_path ().string ()),
+             0);
+  EXPECT_EQ (readAll (image), kept);
+  fs::remove_all (dir);
+}
+
 TEST (LandmarkApps, VideoFileFrameByFrame)
 {
   // A short MJPEG AVI written with OpenCV's own encoder (no FFmpeg needed): each of its

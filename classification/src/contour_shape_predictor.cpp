@@ -10,7 +10,9 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include <cmath>
 #include <fstream>
+#include <iterator>
 #include <sstream>
 #include <stdexcept>
 
@@ -135,22 +137,89 @@ ContourShapePredictor::train (const std::vector<LandmarkTrainingImage> &images,
   return predictor;
 }
 
+namespace
+{
+// dlib trusts a model's indices when it predicts, so a damaged file that still parses
+// would read out of bounds. The parts are read as dlib serialises them (version 1) and
+// checked against each other before the model itself is deserialised.
+std::string
+shapePredictorProblem (const std::string &bytes)
+{
+  std::istringstream in (bytes);
+  int version = 0;
+  dlib::matrix<float, 0, 1> initial_shape;
+  std::vector<std::vector<dlib::impl::regression_tree>> forests;
+  std::vector<std::vector<unsigned long>> anchor_idx;
+  std::vector<std::vector<dlib::vector<float, 2>>> deltas;
+  dlib::deserialize (version, in);
+  if (version != 1)
+    return "unknown shape predictor version " + std::to_string (version);
+  dlib::deserialize (initial_shape, in);
+  dlib::deserialize (forests, in);
+  dlib::deserialize (anchor_idx, in);
+  dlib::deserialize (deltas, in);
+  const auto shape_size = static_cast<std::size_t> (initial_shape.size ());
+  if (shape_size == 0 || shape_size % 2 != 0)
+    return "the mean shape has " + std::to_string (shape_size) + " coordinates";
+  for (long i = 0; i < initial_shape.size (); ++i)
+    if (!std::isfinite (initial_shape (i)))
+      return "the mean shape holds a value that is not finite";
+  if (anchor_idx.size () != forests.size () || deltas.size () != forests.size ())
+    return "cascade levels, anchors and offsets differ in number";
+  for (std::size_t level = 0; level < forests.size (); ++level)
+  {
+    const std::size_t pixels = anchor_idx[level].size ();
+    if (deltas[level].size () != pixels)
+      return "level " + std::to_string (level) + ": anchors and offsets differ in number";
+    for (const unsigned long anchor : anchor_idx[level])
+      if (anchor >= shape_size / 2)
+        return "level " + std::to_string (level) + ": a feature pixel is anchored to landmark " +
+               std::to_string (anchor) + " of " + std::to_string (shape_size / 2);
+    for (const auto &tree : forests[level])
+    {
+      const std::size_t leaves = tree.leaf_values.size ();
+      if (leaves == 0 || (leaves & (leaves - 1)) != 0 || leaves != tree.splits.size () + 1)
+        return "level " + std::to_string (level) + ": a tree with " + std::to_string (tree.splits.size ()) +
+               " splits and " + std::to_string (leaves) + " leaves";
+      for (const auto &split : tree.splits)
+        if (split.idx1 >= pixels || split.idx2 >= pixels || !std::isfinite (split.thresh))
+          return "level " + std::to_string (level) + ": a split on feature pixel " +
+                 std::to_string (std::max (split.idx1, split.idx2)) + " of " + std::to_string (pixels);
+      for (const auto &leaf : tree.leaf_values)
+        if (static_cast<std::size_t> (leaf.size ()) != shape_size)
+          return "level " + std::to_string (level) + ": a leaf with " + std::to_string (leaf.size ()) +
+                 " values for a shape of " + std::to_string (shape_size);
+    }
+  }
+  return "";
+}
+}  // namespace
+
 ContourShapePredictor
 ContourShapePredictor::load (const std::string &path)
 {
   std::ifstream in (path, std::ios::binary);
   if (!in)
     throw std::runtime_error (path + ": cannot open the shape predictor model");
+  const std::string bytes ((std::istreambuf_iterator<char> (in)), std::istreambuf_iterator<char> ());
   ContourShapePredictor predictor;
   predictor.impl_ = std::make_unique<Impl> ();
+  std::string problem;
   try
   {
-    dlib::deserialize (predictor.impl_->model, in);
+    problem = shapePredictorProblem (bytes);
+    if (problem.empty ())
+    {
+      std::istringstream model (bytes);
+      dlib::deserialize (predictor.impl_->model, model);
+    }
   }
   catch (const std::exception &e)
   {
     throw std::runtime_error (path + ": not a dlib shape predictor model (" + std::string (e.what ()) + ")");
   }
+  if (!problem.empty ())
+    throw std::runtime_error (path + ": damaged shape predictor model (" + problem + ")");
   if (predictor.impl_->model.num_parts () == 0)
     throw std::runtime_error (path + ": the shape predictor model has no landmarks");
   return predictor;

@@ -136,9 +136,19 @@ private:
       {
         const long code = entity.size () > 1 && entity[1] == 'x' ? std::strtol (entity.c_str () + 2, nullptr, 16)
                                                                    : std::strtol (entity.c_str () + 1, nullptr, 10);
-        if (code <= 0 || code > 255)
-          fail ("unsupported character reference &" + entity + ";");
-        out += static_cast<char> (code);
+        if (code <= 0 || code > 0x10FFFF || (code >= 0xD800 && code <= 0xDFFF))
+          fail ("invalid character reference &" + entity + ";");
+        // Written as UTF-8, the encoding the files declare and file names use.
+        if (code < 0x80)
+          out += static_cast<char> (code);
+        else if (code < 0x800)
+          out += {static_cast<char> (0xC0 | code >> 6), static_cast<char> (0x80 | (code & 0x3F))};
+        else if (code < 0x10000)
+          out += {static_cast<char> (0xE0 | code >> 12), static_cast<char> (0x80 | (code >> 6 & 0x3F)),
+                  static_cast<char> (0x80 | (code & 0x3F))};
+        else
+          out += {static_cast<char> (0xF0 | code >> 18), static_cast<char> (0x80 | (code >> 12 & 0x3F)),
+                  static_cast<char> (0x80 | (code >> 6 & 0x3F)), static_cast<char> (0x80 | (code & 0x3F))};
       }
       else
         fail ("unknown entity &" + entity + ";");
@@ -296,6 +306,9 @@ public:
       fail (node, "box with a negative size");
     const auto ignore = node.attributes.find ("ignore");
     box.ignore = ignore != node.attributes.end () && ignore->second != "0" && ignore->second != "false";
+    // A person box of no area has no scale: one such box wrecks a shape predictor's training.
+    if (!box.ignore && (box.rect.width == 0 || box.rect.height == 0))
+      fail (node, "box of zero width or height (mark it ignore='1' or give its size)");
     for (const auto &child : node.children)
       if (child->name == "label")
         box.label = trimmed (child->text);
@@ -360,7 +373,7 @@ std::string
 imglabDatasetXml (const ImglabDataset &dataset)
 {
   std::ostringstream out;
-  out << "<?xml version='1.0' encoding='ISO-8859-1'?>\n"
+  out << "<?xml version='1.0' encoding='UTF-8'?>\n"
       << "<?xml-stylesheet type='text/xsl' href='image_metadata_stylesheet.xsl'?>\n"
       << "<dataset>\n"
       << "<name>" << escaped (dataset.name) << "</name>\n"

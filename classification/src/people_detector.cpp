@@ -199,8 +199,12 @@ PeopleDetector::detect (const cv::Mat &image, double threshold) const
     return people;
   const cv::Mat grey = toGrey (image);
   cv::Mat resized = grey;
+  // An image that shrinks to nothing holds no person the detector could see.
+  const cv::Size scaled_size (cvRound (grey.cols * impl_->scale), cvRound (grey.rows * impl_->scale));
+  if (scaled_size.width < 1 || scaled_size.height < 1)
+    return people;
   if (impl_->scale != 1.0)
-    cv::resize (grey, resized, cv::Size (), impl_->scale, impl_->scale,
+    cv::resize (grey, resized, scaled_size, 0, 0,
                 impl_->scale < 1.0 ? cv::INTER_AREA : cv::INTER_LINEAR);
   if (impl_->opencv_default)
   {

@@ -58,26 +58,40 @@ writeFileAtomic (const std::string &path, const std::string &bytes)
 void
 checkOutputIsNotInput (const std::string &output, const std::vector<std::string> &inputs)
 {
+  InputFiles (inputs).checkOutput (output);
+}
+
+InputFiles::InputFiles (const std::vector<std::string> &paths)
+{
+  for (const auto &path : paths)
+    add (path);
+}
+
+void
+InputFiles::add (const std::string &path)
+{
   std::error_code ec;
-  const fs::path out = fs::weakly_canonical (output, ec);
+  // Absolute first: of a path none of whose parts exist yet, weakly_canonical keeps it relative.
+  const fs::path p = fs::weakly_canonical (fs::absolute (path, ec), ec);
+  if (ec || p.empty ())
+    return;
+  files_.insert (p);
+  for (fs::path a = p.parent_path (); !a.empty () && folders_.insert (a).second; a = a.parent_path ())
+    if (a == a.parent_path ())
+      break;
+}
+
+void
+InputFiles::checkOutput (const std::string &output) const
+{
+  std::error_code ec;
+  const fs::path out = fs::weakly_canonical (fs::absolute (output, ec), ec);
   if (ec)
     return;
-  for (const auto &in : inputs)
-  {
-    const fs::path p = fs::weakly_canonical (in, ec);
-    if (ec)
-      continue;
-    if (p == out)
-      throw std::runtime_error (output + ": output would overwrite an input file; choose another path");
-    // A directory output replaced with --force would take its contents with it.
-    for (fs::path a = p.parent_path (); !a.empty (); a = a.parent_path ())
-    {
-      if (a == out)
-        throw std::runtime_error (output + ": output would replace a directory that holds the input " + in +
-                                  "; choose another path");
-      if (a == a.parent_path ())
-        break;
-    }
-  }
+  if (files_.count (out))
+    throw std::runtime_error (output + ": output would overwrite an input file; choose another path");
+  // A directory output replaced with --force would take its contents with it.
+  if (folders_.count (out))
+    throw std::runtime_error (output + ": output would replace a directory that holds an input file; choose another path");
 }
 }  // namespace agex

@@ -191,6 +191,10 @@ loadFrame (const std::string &path, const FrameOptions &options)
     depth = readRawU16 (path, options.width, options.height);
   else
     fail (path, "unknown frame format '" + ext + "' (expected .pcd, .png or .u16)");
+  // Like an organized PCD: pixels need neighbours above or below for any stage to work.
+  if (depth.rows < 2 || depth.cols < 2)
+    fail (path, "a " + std::to_string (depth.cols) + "x" + std::to_string (depth.rows) +
+                    " image; a depth frame needs at least 2 rows and 2 columns");
 
   Frame frame;
   frame.path = path;

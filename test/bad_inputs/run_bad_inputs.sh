@@ -142,6 +142,32 @@ check "agex_convert killed (SIGKILL) while writing, run again" 0 "40 frames" $C 
 left=$(ls -a out | grep -c partial)
 [ "$left" = 0 ] || { echo "FAILED: $left staging directories left after the rerun" >&2; failures=$((failures + 1)); }
 
+# Outputs that would land on what a run reads: models, a dataset's files, the frames.
+head -c 200 /dev/zero | tr '\0' '\7' > in/one_row_100x1.u16
+mkdir -p in/no_frames
+echo "my notes" > in/notes.txt
+(cd in && find . -type f -print0 | sort -z | xargs -0 sha256sum) > inputs.sha256
+check "JSON over the model" 1 "model.yml: output would overwrite an input" $D in/frame.png --model in/model.yml --json in/model.yml
+check "JSON lines over a dataset's labels" 1 "labels.csv: output would overwrite an input" $D in/dataset --json in/dataset/labels.csv
+check "report over a dataset's labels" 1 "labels.csv: output would overwrite an input" $E detect --dataset in/dataset --json in/dataset/labels.csv
+check "plot over a dataset frame" 1 "wall_176x144.pcd: output would overwrite an input" $E coverage --dataset in/dataset --plot in/dataset/frames/wall_176x144.pcd
+check "model over a dataset's labels" 1 "labels.csv: output would overwrite an input" $T --dataset in/dataset --out in/dataset/labels.csv
+check "benchmark over a dataset frame" 1 "wall_176x144.pcd: output would overwrite an input" $BIN/agex_bench --dataset in/dataset --json in/dataset/frames/wall_176x144.pcd
+check "batch JSON lines onto a file that is not a batch result" 1 "notes.txt: line 1 is not a frame result" $D in/batch --width 176 --height 144 --json in/notes.txt
+check "a directory without frames" 1 "no_frames: no frames" $D in/no_frames --json out/none.jsonl
+check "a frame one row high" 1 "one_row_100x1.u16: a 100x1 image; a depth frame needs at least 2 rows" $K in/one_row_100x1.u16 --width 100 --height 1
+check "a NaN focal length" 1 "--fy must be a positive number" $K in/frame.png --fy nan
+check "a median window of 100000 pixels" 1 "--median-window must lie in" $K in/frame.png --median-window 100000
+# Reruns find their frames however the input is spelled; more jobs than frames is fine.
+check "agex_detect rerun as ./in/batch/" 0 "60 frames already in" $D ./in/batch/ --width 176 --height 144 --json out/batch.jsonl
+[ "$(wc -l < out/batch.jsonl)" = 60 ] || { echo "FAILED: the respelled rerun added lines" >&2; failures=$((failures + 1)); }
+head -c -1 out/batch.jsonl > out/no_newline.jsonl  # the last line lost its newline
+sed -i '$d' out/no_newline.jsonl && head -c -1 out/no_newline.jsonl > out/cut.jsonl
+check "agex_detect rerun onto a file whose last line has no newline" 0 "59 frames already in" $D in/batch --width 176 --height 144 --json out/cut.jsonl
+[ "$(grep -c '^{.*}$' out/cut.jsonl)" = 60 ] || { echo "FAILED: the appended line was glued to the last one" >&2; failures=$((failures + 1)); }
+check "agex_detect --jobs 100000" 0 "" $D in/batch --width 176 --height 144 --json out/jobs.jsonl --jobs 100000
+[ "$(wc -l < out/jobs.jsonl)" = 60 ] || { echo "FAILED: --jobs 100000 did not give 60 lines" >&2; failures=$((failures + 1)); }
+
 if [ "$failures" -gt 0 ]; then
   echo "$failures bad-input case(s) failed" >&2
   exit 1

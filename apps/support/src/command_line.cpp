@@ -5,8 +5,10 @@
 
 #include <algorithm>
 #include <filesystem>
-
 #include <iostream>
+#include <system_error>
+#include <thread>
+#include <vector>
 
 #include <unistd.h>
 
@@ -16,6 +18,27 @@ namespace agex
 {
 namespace apps
 {
+int
+runWorkers (int jobs, std::size_t work_items, const std::function<void ()> &worker)
+{
+  const std::size_t wanted = std::max<std::size_t> (1, std::min<std::size_t> (std::max (jobs, 1), work_items));
+  std::vector<std::thread> threads;
+  try
+  {
+    while (threads.size () < wanted)
+      threads.emplace_back (worker);
+  }
+  catch (const std::system_error &)
+  {
+    if (threads.empty ())
+      throw;
+    std::cerr << "warning: the system gave only " << threads.size () << " of " << wanted << " threads\n";
+  }
+  for (auto &t : threads)
+    t.join ();
+  return static_cast<int> (threads.size ());
+}
+
 std::string
 bundledDataFile (const std::string &relative)
 {

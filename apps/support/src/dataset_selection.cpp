@@ -39,5 +39,14 @@ selectDataset (const std::string &spec, bool keyframes_only)
       throw std::runtime_error (directory + ": has no sequence '" + s + "'");
   return selection;
 }
+
+std::vector<std::string>
+datasetFiles (const Dataset &dataset)
+{
+  std::vector<std::string> files{dataset.directory () + "/dataset.json", dataset.directory () + "/labels.csv"};
+  for (const auto &frame : dataset.frames ())
+    files.push_back (dataset.framePath (frame.id));
+  return files;
+}
 }  // namespace apps
 }  // namespace agex

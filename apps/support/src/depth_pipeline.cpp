@@ -294,13 +294,33 @@ runDepthPipeline (const pcl::PointCloud<pcl::PointXYZ>::ConstPtr &input, const P
 po::options_description
 frameOptionsDescription (FrameOptions &options)
 {
+  // Checked as they are parsed: a NaN focal length would give empty frames, not an error.
+  const auto positive = [] (const char *name) {
+    return [name] (double v) {
+      if (!(v > 0.0) || !std::isfinite (v))
+        throw std::runtime_error (std::string ("--") + name + " must be a positive number");
+    };
+  };
+  const auto finite = [] (const char *name) {
+    return [name] (double v) {
+      if (!std::isfinite (v))
+        throw std::runtime_error (std::string ("--") + name + " must be a finite number");
+    };
+  };
   po::options_description desc ("Frame input (depth images; defaults: Kinect, see ../shared/README.md)");
   desc.add_options ()
-    ("fx", po::value (&options.intrinsics.fx)->default_value (options.intrinsics.fx), "focal length x, pixels")
-    ("fy", po::value (&options.intrinsics.fy)->default_value (options.intrinsics.fy), "focal length y, pixels")
-    ("cx", po::value (&options.intrinsics.cx)->default_value (options.intrinsics.cx), "principal point x, pixels")
-    ("cy", po::value (&options.intrinsics.cy)->default_value (options.intrinsics.cy), "principal point y, pixels")
-    ("depth-scale", po::value (&options.depth_scale)->default_value (0.0, "auto"),
+    ("fx", po::value (&options.intrinsics.fx)->default_value (options.intrinsics.fx)->notifier (positive ("fx")),
+     "focal length x, pixels")
+    ("fy", po::value (&options.intrinsics.fy)->default_value (options.intrinsics.fy)->notifier (positive ("fy")),
+     "focal length y, pixels")
+    ("cx", po::value (&options.intrinsics.cx)->default_value (options.intrinsics.cx)->notifier (finite ("cx")),
+     "principal point x, pixels")
+    ("cy", po::value (&options.intrinsics.cy)->default_value (options.intrinsics.cy)->notifier (finite ("cy")),
+     "principal point y, pixels")
+    ("depth-scale", po::value (&options.depth_scale)->default_value (0.0, "auto")->notifier ([] (double v) {
+       if (!(v >= 0.0) || !std::isfinite (v))
+         throw std::runtime_error ("--depth-scale must be a positive number of metres per depth unit");
+     }),
      "metres per depth unit; auto: 0.016 for 8-bit PNG (Bonn), 0.001 for 16-bit PNG and .u16")
     ("width", po::value (&options.width)->default_value (options.width), "width of a raw .u16 frame")
     ("height", po::value (&options.height)->default_value (options.height), "height of a raw .u16 frame");
@@ -371,6 +391,19 @@ finishPipelineOptions (const std::vector<std::string> &storage, PipelineParams &
     throw std::runtime_error ("--delta-connected must be > 0 and --delta-orient >= 0");
   if (!(params.median_max_movement >= 0.f))
     throw std::runtime_error ("--median-max-movement must be >= 0");
+  if (params.median_window < 0 || params.median_window > 31)
+    throw std::runtime_error ("--median-window must lie in [0, 31] pixels");
+  if (params.mixed_window_radius < 1 || params.mixed_window_radius > 31 || !(params.mixed_min_jump > 0.f) ||
+      !(params.mixed_max_veil_angle_deg > 0.f && params.mixed_max_veil_angle_deg < 90.f))
+    throw std::runtime_error ("--mixed-window must lie in [1, 31], --mixed-min-jump be positive and "
+                              "--mixed-max-angle lie in (0, 90) degrees");
+  if (!(params.floor_distance > 0.f) || !(params.floor_max_tilt_deg >= 0.f && params.floor_max_tilt_deg < 90.f))
+    throw std::runtime_error ("--floor-distance must be positive and --floor-max-tilt lie in [0, 90) degrees");
+  // -1 is "auto", the defaults' own value.
+  if (params.min_mesh_size < -1 || params.spur_iterations < -1)
+    throw std::runtime_error ("--min-mesh-size and --spur-iterations must be 0 or more (or auto)");
+  if (!(params.spur_depth > 0.f) || params.spur_min_connected < 0 || params.spur_min_connected > 8)
+    throw std::runtime_error ("--spur-depth must be positive and --spur-min-connected lie in [0, 8]");
 }
 }  // namespace apps
 }  // namespace agex

@@ -1,12 +1,16 @@
 #include <agex/apps/landmarks.h>
 
 #include <agex/classification/contour_annotation.h>
+#include <agex/common/frame_io.h>
 
 #include <boost/program_options/value_semantic.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include <chrono>
+#include <cstdint>
+#include <fstream>
+#include <iterator>
 #include <stdexcept>
 
 namespace po = boost::program_options;
@@ -17,6 +21,113 @@ namespace apps
 {
 const char *const kShoulderPartNames[2] = {"left_shoulder", "right_shoulder"};
 
+namespace
+{
+struct ImageHeader
+{
+  std::uint64_t width = 0, height = 0;  ///< 0: not found in the header
+  bool truncated = false;
+};
+
+// Size from a PNG's IHDR or a JPEG's SOF segment, and whether a JPEG reaches its
+// end-of-image marker. Segments are walked and entropy-coded data skipped, so data a camera
+// appends after the marker does no harm. Anything it cannot parse is left to the decoder.
+ImageHeader
+probeImage (const std::string &b)
+{
+  ImageHeader header;
+  const auto byte = [&] (std::size_t i) { return static_cast<unsigned char> (b[i]); };
+  const std::size_t n = b.size ();
+  if (n >= 24 && b.compare (0, 8, "\x89PNG\r\n\x1a\n") == 0 && b.compare (12, 4, "IHDR") == 0)
+  {
+    for (int i = 0; i < 4; ++i)
+    {
+      header.width = header.width << 8 | byte (16 + i);
+      header.height = header.height << 8 | byte (20 + i);
+    }
+    return header;
+  }
+  if (n < 2 || byte (0) != 0xFF || byte (1) != 0xD8)
+    return header;
+  std::size_t i = 2;
+  while (i < n)
+  {
+    if (byte (i) != 0xFF)
+      return header;  // not a marker where one belongs: let the decoder judge
+    while (i < n && byte (i) == 0xFF)
+      ++i;  // fill bytes
+    if (i >= n)
+      break;
+    const unsigned char marker = byte (i++);
+    if (marker == 0xD9)
+      return header;  // end of image
+    if (marker == 0x01 || (marker >= 0xD0 && marker <= 0xD8))
+      continue;  // markers without a segment
+    if (i + 2 > n)
+      break;
+    const std::size_t length = static_cast<std::size_t> (byte (i)) << 8 | byte (i + 1);
+    if (length < 2)
+      return header;
+    const bool frame_header = marker >= 0xC0 && marker <= 0xCF && marker != 0xC4 && marker != 0xC8 && marker != 0xCC;
+    if (frame_header && i + 7 <= n)
+    {
+      header.height = static_cast<std::uint64_t> (byte (i + 3)) << 8 | byte (i + 4);
+      header.width = static_cast<std::uint64_t> (byte (i + 5)) << 8 | byte (i + 6);
+    }
+    i += length;
+    if (marker == 0xDA)
+    {
+      // Entropy-coded data runs to the next marker: 0xFF not followed by a stuffed zero
+      // or a restart marker.
+      while (i + 1 < n && !(byte (i) == 0xFF && byte (i + 1) != 0 && (byte (i + 1) < 0xD0 || byte (i + 1) > 0xD7)))
+        ++i;
+      if (i + 1 >= n)
+        break;
+    }
+  }
+  header.truncated = true;
+  return header;
+}
+}  // namespace
+
+cv::Mat
+readImage (const std::string &path, int flags, const std::string &role)
+{
+  const std::string what = role.empty () ? "" : " (" + role + ")";
+  std::ifstream in (path, std::ios::binary);
+  if (!in)
+    throw std::runtime_error (path + ": cannot open the image" + what);
+  const std::string bytes ((std::istreambuf_iterator<char> (in)), std::istreambuf_iterator<char> ());
+  if (bytes.empty ())
+    throw std::runtime_error (path + ": empty file, not an image" + what);
+  const ImageHeader header = probeImage (bytes);
+  const auto too_large = [&] (std::uint64_t width, std::uint64_t height) {
+    if (width * height > kMaxFramePixels)
+      throw std::runtime_error (path + ": a " + std::to_string (width) + "x" + std::to_string (height) +
+                                " image, more than the " + std::to_string (kMaxFramePixels) + " pixels agex reads" + what);
+  };
+  too_large (header.width, header.height);
+  if (header.truncated)
+    throw std::runtime_error (path + ": truncated JPEG (the data ends before its end-of-image marker)" + what);
+  const cv::Mat image = cv::imdecode (cv::Mat (1, static_cast<int> (bytes.size ()), CV_8UC1,
+                                               const_cast<char *> (bytes.data ())), flags);
+  if (image.empty ())
+    throw std::runtime_error (path + ": not an image OpenCV can decode" + what);
+  too_large (static_cast<std::uint64_t> (image.cols), static_cast<std::uint64_t> (image.rows));
+  return image;
+}
+
+ContourShapePredictor
+loadContourModel (const std::string &path)
+{
+  ContourShapePredictor predictor = ContourShapePredictor::load (path);
+  if (predictor.landmarkCount () != kContourLandmarkCount)
+    throw std::runtime_error (path + ": the model places " + std::to_string (predictor.landmarkCount ()) +
+                              " landmarks, not the " + std::to_string (kContourLandmarkCount) +
+                              " contour landmarks agex draws and scores (train one with agex_landmarks_train)");
+  return predictor;
+}
+
 std::vector<AnnotatedImage>
 loadLandmarkDataset (const std::string &xml_path)
 {
@@ -26,9 +137,7 @@ loadLandmarkDataset (const std::string &xml_path)
   {
     AnnotatedImage image;
     image.path = resolveImglabImagePath (xml_path, entry.file);
-    image.grey = cv::imread (image.path, cv::IMREAD_GRAYSCALE);
-    if (image.grey.empty ())
-      throw std::runtime_error (xml_path + ": cannot read its image " + image.path);
+    image.grey = readImage (image.path, cv::IMREAD_GRAYSCALE, "an image of " + xml_path);
     for (const ImglabBox &box : entry.boxes)
     {
       AnnotatedPerson person;

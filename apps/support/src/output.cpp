@@ -89,7 +89,8 @@ renderOverlay (const pcl::PointCloud<pcl::PointXYZ> &frame, const std::vector<pc
         px[c] = static_cast<unsigned char> ((px[c] + tint[c]) / 2);
     }
   // Small frames (the 144x176 view) are scaled up so that markers stay legible.
-  const int scale = std::max (1, 480 / std::max (1, height));
+  // Both sides count, so that a wide, short frame is not blown up past 4096 pixels.
+  const int scale = std::max (1, std::min (480 / std::max (1, height), 4096 / std::max (1, image.cols)));
   if (scale > 1)
     cv::resize (image, image, cv::Size (), scale, scale, cv::INTER_NEAREST);
   const int radius = 6, arrow = 40;

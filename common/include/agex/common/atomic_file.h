@@ -3,6 +3,8 @@
 // rename(2), so a crash or a full disk never leaves a half-written file behind
 // and an earlier good output survives a failed run.
 
+#include <filesystem>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -15,4 +17,21 @@ void writeFileAtomic (const std::string &path, const std::string &bytes);
 /** \brief Throws std::runtime_error if output names the same file as any input, or a
   * directory that holds one (so an app never overwrites or replaces what it reads). */
 void checkOutputIsNotInput (const std::string &output, const std::vector<std::string> &inputs);
+
+/** \brief The files an app reads, resolved once, so that each of many outputs (one
+  * overlay per image of a large dataset) is checked against all of them cheaply. */
+class InputFiles
+{
+public:
+  InputFiles () = default;
+  explicit InputFiles (const std::vector<std::string> &paths);
+  /** Adds a file that is read; paths that cannot be resolved are skipped. */
+  void add (const std::string &path);
+  /** \throws std::runtime_error if output names an input, or a directory that holds one */
+  void checkOutput (const std::string &output) const;
+
+private:
+  std::set<std::filesystem::path> files_;
+  std::set<std::filesystem::path> folders_;  ///< every directory above an input
+};
 }  // namespace agex

@@ -4,6 +4,7 @@
 #include <boost/program_options/positional_options.hpp>
 
 #include <cstddef>
+#include <functional>
 #include <string>
 
 namespace agex
@@ -28,6 +29,11 @@ extern const std::string kBundledFrameFile;
 extern const std::string kBundledSlidingWindowModelFile;
 /** bundledDataFile ("models/agex_contour_landmarks.dat"), agex_landmarks' default model. */
 extern const std::string kBundledLandmarkModelFile;
+
+/** \brief Runs worker on min(jobs, work_items) threads (at least one) and joins them.
+  * If the system refuses some of the threads, runs on those it got; if it refuses all,
+  * throws std::system_error. \return the threads used */
+int runWorkers (int jobs, std::size_t work_items, const std::function<void ()> &worker);
 
 /** \brief Progress of long work on standard error: a line updated in place on a
   * terminal, a line per tenth of the work otherwise (logs stay short). */

@@ -20,5 +20,8 @@ struct DatasetSelection
 /** \brief Reads "DIR" or "DIR@1,2,3"; keyframes_only keeps frames with a keyframe label.
   * \throws DatasetError (bad dataset) or std::runtime_error (unknown sequence) */
 DatasetSelection selectDataset (const std::string &spec, bool keyframes_only);
+
+/** Every file of a dataset (dataset.json, labels.csv, all its frames): what no output may overwrite. */
+std::vector<std::string> datasetFiles (const Dataset &dataset);
 }  // namespace apps
 }  // namespace agex

@@ -34,6 +34,17 @@ struct AnnotatedImage
   std::vector<cv::Rect> ignored;  ///< boxes marked ignore or without all landmarks
 };
 
+/** \brief Reads an image for the 2D apps (cv::imread flags). Refuses, naming the file and
+  * what it was needed for (role, e.g. "an image of dataset.xml"): unreadable or undecodable
+  * files, images over agex::kMaxFramePixels (checked in a PNG or JPEG header before any
+  * decoding), and truncated JPEGs, which OpenCV would decode with a warning and grey rows.
+  * \throws std::runtime_error */
+cv::Mat readImage (const std::string &path, int flags, const std::string &role = "");
+
+/** \brief Loads a contour shape predictor and checks that it places the
+  * kContourLandmarkCount landmarks the apps draw and score. \throws std::runtime_error */
+ContourShapePredictor loadContourModel (const std::string &path);
+
 /** Part names for the shoulders in our imglab files (from COCO keypoints). */
 extern const char *const kShoulderPartNames[2];
 

@@ -6,6 +6,7 @@
 
 #include <agex/apps/body_parts.h>
 #include <agex/apps/command_line.h>
+#include <agex/apps/dataset_selection.h>
 #include <agex/apps/depth_pipeline.h>
 #include <agex/apps/output.h>
 #include <agex/apps/sliding_window.h>
@@ -73,8 +74,8 @@ collectJobs (const std::vector<std::string> &inputs, agex::InputFiles &read)
     if (fs::is_directory (input) && fs::exists (fs::path (input) / "dataset.json"))
     {
       const agex::Dataset dataset = agex::Dataset::read (input);
-      read.add ((fs::path (input) / "dataset.json").string ());
-      read.add ((fs::path (input) / "labels.csv").string ());
+      for (const auto &file : agex::apps::datasetFiles (dataset))
+        read.add (file);
       for (const auto &frame : dataset.frames ())
         add (fs::path (input) / frame.id, dataset.framePath (frame.id));
     }

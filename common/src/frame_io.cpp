@@ -32,8 +32,7 @@ fail (const std::string &path, const std::string &problem)
   throw FrameError (path + ": " + problem);
 }
 
-/** A PNG's size from its IHDR chunk (bytes 16..23, big-endian), read before decoding so
-  * that a damaged header cannot make the decoder allocate gigabytes. */
+/** Refuses a PNG too large to decode from its header, before the decoder allocates. */
 void
 checkPngSize (const std::string &path)
 {
@@ -41,13 +40,9 @@ checkPngSize (const std::string &path)
   std::ifstream in (path, std::ios::binary);
   if (!in.read (reinterpret_cast<char *> (head), sizeof (head)))
     return;  // too short to be a PNG: the decoder says so
-  static const unsigned char signature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
-  if (!std::equal (signature, signature + 8, head) || !std::equal (head + 12, head + 16, "IHDR"))
-    return;
-  auto big_endian = [] (const unsigned char *b) {
-    return (std::uint64_t (b[0]) << 24) | (std::uint64_t (b[1]) << 16) | (std::uint64_t (b[2]) << 8) | b[3];
-  };
-  checkFrameSize (path, big_endian (head + 16), big_endian (head + 20));
+  std::uint64_t width = 0, height = 0;
+  if (pngHeaderSize (head, sizeof (head), width, height))
+    checkFrameSize (path, width, height);
 }
 
 /** agex stages read x, y, z as single floats from any organized cloud. */
@@ -112,6 +107,20 @@ readRawU16 (const std::string &path, int width, int height)
   return depth;
 }
 }  // namespace
+
+bool
+pngHeaderSize (const unsigned char *head, std::size_t length, std::uint64_t &width, std::uint64_t &height)
+{
+  static const unsigned char signature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+  if (length < 24 || !std::equal (signature, signature + 8, head) || !std::equal (head + 12, head + 16, "IHDR"))
+    return false;
+  auto big_endian = [] (const unsigned char *b) {
+    return (std::uint64_t (b[0]) << 24) | (std::uint64_t (b[1]) << 16) | (std::uint64_t (b[2]) << 8) | b[3];
+  };
+  width = big_endian (head + 16);
+  height = big_endian (head + 20);
+  return true;
+}
 
 void
 checkFrameSize (const std::string &path, std::uint64_t width, std::uint64_t height)

@@ -38,15 +38,8 @@ probeImage (const std::string &b)
   ImageHeader header;
   const auto byte = [&] (std::size_t i) { return static_cast<unsigned char> (b[i]); };
   const std::size_t n = b.size ();
-  if (n >= 24 && b.compare (0, 8, "\x89PNG\r\n\x1a\n") == 0 && b.compare (12, 4, "IHDR") == 0)
-  {
-    for (int i = 0; i < 4; ++i)
-    {
-      header.width = header.width << 8 | byte (16 + i);
-      header.height = header.height << 8 | byte (20 + i);
-    }
+  if (pngHeaderSize (reinterpret_cast<const unsigned char *> (b.data ()), n, header.width, header.height))
     return header;
-  }
   if (n < 2 || byte (0) != 0xFF || byte (1) != 0xD8)
     return header;
   std::size_t i = 2;

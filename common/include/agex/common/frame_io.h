@@ -51,6 +51,10 @@ public:
   * \throws FrameError naming the file and the claimed size */
 void checkFrameSize (const std::string &path, std::uint64_t width, std::uint64_t height);
 
+/** \brief A PNG's size from its IHDR chunk (the first 24 bytes of the file), so that it can
+  * be checked before decoding. \return false if head is not the start of a PNG */
+bool pngHeaderSize (const unsigned char *head, std::size_t length, std::uint64_t &width, std::uint64_t &height);
+
 /** A loaded frame. */
 struct Frame
 {

@@ -10,11 +10,16 @@
 
 #include "test_support.h"
 
+#ifdef AGEX_LANDMARKS_APP_SUPPORT
+#include <agex/apps/landmarks.h>
+#endif
+
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
 
+#include <algorithm>
 #include <random>
 
 #include <sys/wait.h>
@@ -473,6 +478,116 @@ TEST (PeopleDetector, TrainsOnSyntheticFiguresAndRoundTrips)
   EXPECT_THROW (agex::PeopleDetector::train ({}, {}, params), std::invalid_argument);
   fs::remove_all (dir);
 }
+
+// Every training image has two figures, one boxed and one in an ignore region. Had the
+// unboxed figure counted as background, the positives and negatives would look alike; as an
+// ignore region it does not, and the detector finds both figures of a new image (trained
+// without the regions, it found neither).
+TEST (PeopleDetector, IgnoreRegionsAreNotBackground)
+{
+  std::mt19937 rng (5);
+  std::uniform_real_distribution<float> arm (-0.5f, 1.2f), legs (0.15f, 0.45f), jitter (-8.f, 8.f);
+  auto make = [&] (cv::Rect *left, cv::Rect *right) {
+    const Figure a = drawFigure (cv::Size (400, 240), cv::Point2f (100 + jitter (rng), 115), 0.9f, arm (rng), legs (rng));
+    const Figure b = drawFigure (cv::Size (400, 240), cv::Point2f (300 + jitter (rng), 115), 0.9f, arm (rng), legs (rng));
+    *left = agex::annotateContour (a.mask, agex::ContourAnchors ()).box;
+    *right = agex::annotateContour (b.mask, agex::ContourAnchors ()).box;
+    cv::Mat noise (a.mask.size (), CV_8UC1);
+    cv::randu (noise, 0, 60);
+    return cv::Mat (noise + (a.mask | b.mask) * 0.7);
+  };
+  std::vector<cv::Mat> images;
+  std::vector<std::vector<cv::Rect>> boxes, regions;
+  for (int i = 0; i < 8; ++i)
+  {
+    cv::Rect left, right;
+    images.push_back (make (&left, &right));
+    boxes.push_back ({i % 2 ? left : right});
+    regions.push_back ({i % 2 ? right : left});
+  }
+  agex::PeopleDetectorTrainingParams params;
+  params.window_width = params.window_height = 64;
+  params.num_threads = 2;
+  EXPECT_THROW (agex::PeopleDetector::train (images, boxes, {}, params), std::invalid_argument);
+  const agex::PeopleDetector detector = agex::PeopleDetector::train (images, boxes, regions, params);
+  cv::Rect left, right;
+  const cv::Mat test = make (&left, &right);
+  const auto found = detector.detect (test);
+  for (const cv::Rect &truth : {left, right})
+  {
+    double best = 0;
+    for (const auto &d : found)
+      best = std::max (best, agex::boxIoU (d.box, truth));
+    EXPECT_GT (best, 0.5) << truth;
+  }
+}
+
+// Scaling a tiny image down must not reach OpenCV with an empty size: the image simply holds
+// no box the window can match.
+TEST (PeopleDetector, TrainingOnTinyImagesAtASmallScaleIsAClearError)
+{
+  agex::PeopleDetectorTrainingParams params;
+  params.scale = 0.1;
+  params.num_threads = 1;
+  try
+  {
+    agex::PeopleDetector::train ({cv::Mat (3, 2, CV_8UC1, cv::Scalar (9))}, {{cv::Rect (0, 0, 2, 3)}}, params);
+    ADD_FAILURE () << "trained on a box no window can match";
+  }
+  catch (const std::invalid_argument &e)
+  {
+    EXPECT_NE (std::string (e.what ()).find ("no box"), std::string::npos) << e.what ();
+  }
+}
+
+#ifdef AGEX_LANDMARKS_APP_SUPPORT
+// A box with some but not all 180 landmarks names its line; boxes without any are kept out of
+// training with a warning, not silently.
+TEST (LandmarkApps, PartlyAnnotatedBoxesAreNamedByLine)
+{
+  const fs::path dir = tempDir ("partial_boxes");
+  ASSERT_TRUE (cv::imwrite ((dir / "a.png").string (), cv::Mat (40, 30, CV_8UC1, cv::Scalar (50))));
+  auto dataset = [&] (int parts) {
+    agex::ImglabDataset d;
+    agex::ImglabImage image;
+    image.file = "a.png";
+    agex::ImglabBox box;
+    box.rect = cv::Rect (2, 3, 20, 30);
+    for (int i = 0; i < parts; ++i)
+      box.parts[agex::contourLandmarkName (i)] = cv::Point2f (5.f + i % 10, 6.f + i / 10);
+    image.boxes = {box, box};
+    image.boxes[0].parts.clear ();
+    d.images.push_back (image);
+    const std::string path = (dir / ("d" + std::to_string (parts) + ".xml")).string ();
+    agex::writeImglabDataset (path, d);
+    return path;
+  };
+  const std::string partial = dataset (179);
+  try
+  {
+    agex::apps::loadLandmarkDataset (partial);
+    ADD_FAILURE () << "a box with 179 landmarks was accepted";
+  }
+  catch (const std::runtime_error &e)
+  {
+    // The second <box> of the file.
+    const std::string xml = readAll (partial);
+    const std::size_t second_box = xml.find ("<box", xml.find ("<box") + 1);
+    const long line = 1 + std::count (xml.begin (), xml.begin () + static_cast<long> (second_box), '\n');
+    EXPECT_NE (std::string (e.what ()).find (partial + ": line " + std::to_string (line) + ": a box in a.png has 179 of the 180"),
+               std::string::npos)
+      << e.what ();
+  }
+  testing::internal::CaptureStderr ();
+  const auto images = agex::apps::loadLandmarkDataset (dataset (180));
+  const std::string warning = testing::internal::GetCapturedStderr ();
+  ASSERT_EQ (images.size (), 1u);
+  EXPECT_EQ (images[0].people.size (), 1u);
+  EXPECT_EQ (images[0].ignored.size (), 1u);
+  EXPECT_NE (warning.find ("1 box(es) without contour landmarks"), std::string::npos) << warning;
+  fs::remove_all (dir);
+}
+#endif
 
 #ifdef AGEX_ANNOTATE_EXECUTABLE
 int

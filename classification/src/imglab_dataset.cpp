@@ -298,6 +298,7 @@ public:
   box (const XmlNode &node) const
   {
     ImglabBox box;
+    box.line = node.line;
     box.rect = cv::Rect (static_cast<int> (std::lround (number (node, "left"))),
                          static_cast<int> (std::lround (number (node, "top"))),
                          static_cast<int> (std::lround (number (node, "width"))),

@@ -59,28 +59,47 @@ PeopleDetector
 PeopleDetector::train (const std::vector<cv::Mat> &grey_images, const std::vector<std::vector<cv::Rect>> &boxes,
                        const PeopleDetectorTrainingParams &params, std::size_t *ignored)
 {
+  return train (grey_images, boxes, std::vector<std::vector<cv::Rect>> (boxes.size ()), params, ignored);
+}
+
+PeopleDetector
+PeopleDetector::train (const std::vector<cv::Mat> &grey_images, const std::vector<std::vector<cv::Rect>> &boxes,
+                       const std::vector<std::vector<cv::Rect>> &ignore_regions,
+                       const PeopleDetectorTrainingParams &params, std::size_t *ignored)
+{
   if (grey_images.size () != boxes.size () || grey_images.empty ())
     throw std::invalid_argument ("people detector training: one box list per image needed");
+  if (ignore_regions.size () != boxes.size ())
+    throw std::invalid_argument ("people detector training: one ignore-region list per image needed");
   if (!(params.scale > 0.05 && params.scale <= 4.0))
     throw std::invalid_argument ("people detector training: scale must lie in (0.05, 4]");
   dlib::array<dlib::array2d<unsigned char>> images (grey_images.size ());
-  std::vector<std::vector<dlib::rectangle>> targets (grey_images.size ());
+  std::vector<std::vector<dlib::rectangle>> targets (grey_images.size ()), regions (grey_images.size ());
+  const auto scaled = [&] (const cv::Rect &box) {
+    return toDlib (cv::Rect (cv::Point (static_cast<int> (std::lround (box.x * params.scale)),
+                                        static_cast<int> (std::lround (box.y * params.scale))),
+                             cv::Size (static_cast<int> (std::lround (box.width * params.scale)),
+                                       static_cast<int> (std::lround (box.height * params.scale)))));
+  };
   for (std::size_t i = 0; i < grey_images.size (); ++i)
   {
     cv::Mat grey = toGrey (grey_images[i]);
-    if (params.scale != 1.0)
-      cv::resize (grey, grey, cv::Size (), params.scale, params.scale, cv::INTER_AREA);
+    // At least one pixel: OpenCV asserts on an empty target size, and a tiny image simply
+    // holds no box the window can reach (removed below).
+    if (params.scale != 1.0 && !grey.empty ())
+      cv::resize (grey, grey,
+                  cv::Size (std::max (1, cvRound (grey.cols * params.scale)), std::max (1, cvRound (grey.rows * params.scale))),
+                  0, 0, cv::INTER_AREA);
     dlib::assign_image (images[i], dlib::cv_image<unsigned char> (grey));
     for (const cv::Rect &box : boxes[i])
-      targets[i].push_back (toDlib (cv::Rect (cv::Point (static_cast<int> (std::lround (box.x * params.scale)),
-                                                         static_cast<int> (std::lround (box.y * params.scale))),
-                                              cv::Size (static_cast<int> (std::lround (box.width * params.scale)),
-                                                        static_cast<int> (std::lround (box.height * params.scale))))));
+      targets[i].push_back (scaled (box));
+    for (const cv::Rect &box : ignore_regions[i])
+      regions[i].push_back (scaled (box));
   }
   for (int u = 0; u < params.upsample; ++u)
-    dlib::upsample_image_dataset<dlib::pyramid_down<2>> (images, targets);
+    dlib::upsample_image_dataset<dlib::pyramid_down<2>> (images, targets, regions);
   if (params.add_flips)
-    dlib::add_image_left_right_flips (images, targets);
+    dlib::add_image_left_right_flips (images, targets, regions);
 
   Scanner scanner;
   scanner.set_detection_window_size (params.window_width, params.window_height);
@@ -107,7 +126,10 @@ PeopleDetector::train (const std::vector<cv::Mat> &grey_images, const std::vecto
   detector.impl_ = std::make_unique<Impl> ();
   detector.impl_->upsample = params.upsample;
   detector.impl_->scale = params.scale;
-  detector.impl_->fhog = trainer.train (images, targets, removed);
+  std::vector<std::vector<dlib::rectangle>> ignore = removed;
+  for (std::size_t i = 0; i < ignore.size (); ++i)
+    ignore[i].insert (ignore[i].end (), regions[i].begin (), regions[i].end ());
+  detector.impl_->fhog = trainer.train (images, targets, ignore);
   return detector;
 }
 

@@ -10,6 +10,7 @@
 #include <chrono>
 #include <cstdint>
 #include <fstream>
+#include <iostream>
 #include <iterator>
 #include <stdexcept>
 
@@ -126,6 +127,7 @@ loadLandmarkDataset (const std::string &xml_path)
 {
   const ImglabDataset dataset = readImglabDataset (xml_path);
   std::vector<AnnotatedImage> images;
+  std::size_t boxes_without_landmarks = 0;
   for (const ImglabImage &entry : dataset.images)
   {
     AnnotatedImage image;
@@ -149,8 +151,10 @@ loadLandmarkDataset (const std::string &xml_path)
       if (box.ignore || found != kContourLandmarkCount)
       {
         if (found != 0 && found != kContourLandmarkCount && !box.ignore)
-          throw std::runtime_error (xml_path + ": a box in " + entry.file + " has " + std::to_string (found) + " of the " +
+          throw std::runtime_error (xml_path + ": line " + std::to_string (box.line) + ": a box in " + entry.file +
+                                    " has " + std::to_string (found) + " of the " +
                                     std::to_string (kContourLandmarkCount) + " contour landmarks (parts 000-179)");
+        boxes_without_landmarks += !box.ignore;
         image.ignored.push_back (box.rect);
         continue;
       }
@@ -165,6 +169,12 @@ loadLandmarkDataset (const std::string &xml_path)
     }
     images.push_back (std::move (image));
   }
+  // Such boxes are legal imglab (detector-only annotations), but silently leaving them out of
+  // training and scoring would hide a half-annotated dataset.
+  if (boxes_without_landmarks > 0)
+    std::cerr << "warning: " << xml_path << ": " << boxes_without_landmarks
+              << " box(es) without contour landmarks are treated as ignore regions, not as people "
+                 "(annotate them with agex_annotate, or mark them ignore='1')\n";
   return images;
 }
 
@@ -242,15 +252,16 @@ trainPeopleDetector (const std::vector<AnnotatedImage> &images, const std::vecto
                      const PeopleDetectorTrainingParams &params, std::size_t *ignored)
 {
   std::vector<cv::Mat> greys;
-  std::vector<std::vector<cv::Rect>> boxes;
+  std::vector<std::vector<cv::Rect>> boxes, ignore_regions;
   for (const std::size_t i : which)
   {
     greys.push_back (images.at (i).grey);
     boxes.emplace_back ();
     for (const AnnotatedPerson &person : images[i].people)
       boxes.back ().push_back (person.box);
+    ignore_regions.push_back (images[i].ignored);
   }
-  return PeopleDetector::train (greys, boxes, params, ignored);
+  return PeopleDetector::train (greys, boxes, ignore_regions, params, ignored);
 }
 
 namespace

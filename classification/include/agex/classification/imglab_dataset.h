@@ -17,6 +17,7 @@ struct ImglabBox
   std::string label;
   bool ignore = false;
   std::map<std::string, cv::Point2f> parts;
+  int line = 0;  ///< line of the <box> element in the file read (0: not read from a file)
 };
 
 struct ImglabImage

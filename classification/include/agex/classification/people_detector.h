@@ -47,6 +47,11 @@ public:
     * \throws std::invalid_argument when nothing is left to train on */
   static PeopleDetector train (const std::vector<cv::Mat> &grey_images, const std::vector<std::vector<cv::Rect>> &boxes,
                                const PeopleDetectorTrainingParams &params, std::size_t *ignored = nullptr);
+  /** As above, with regions per image (imglab's ignore boxes) that count neither as a person
+    * nor as background: windows there are never used as negatives. */
+  static PeopleDetector train (const std::vector<cv::Mat> &grey_images, const std::vector<std::vector<cv::Rect>> &boxes,
+                               const std::vector<std::vector<cv::Rect>> &ignore_regions,
+                               const PeopleDetectorTrainingParams &params, std::size_t *ignored = nullptr);
   /** OpenCV's pretrained people detector (64x128 window, INRIA people). Images are
     * resized by \p scale before detection: below 1 it is faster (about scale^2 of the
     * time) and misses people shorter than about 96 / scale pixels (the apps use 0.5).

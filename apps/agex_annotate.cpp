@@ -5,13 +5,14 @@
 // for agex_landmarks_train, agex_landmarks_eval and imglab.
 
 #include <agex/apps/command_line.h>
-#include <agex/apps/depth_pipeline.h>
+#include <agex/apps/pipeline_flags.h>
+#include <agex/detection/depth_pipeline.h>
 #include <agex/apps/landmarks.h>
 #include <agex/apps/output.h>
-#include <agex/classification/contour_annotation.h>
-#include <agex/classification/imglab_dataset.h>
-#include <agex/common/atomic_file.h>
-#include <agex/common/pcd_reader.h>
+#include <agex/landmarks/contour_annotation.h>
+#include <agex/landmarks/imglab_dataset.h>
+#include <agex/io/atomic_file.h>
+#include <agex/io/pcd_reader.h>
 
 #include <pcl/PCLPointCloud2.h>
 #include <pcl/common/io.h>
@@ -286,7 +287,7 @@ annotateRgbd (int argc, char **argv)
   float min_person_m = 1.0f, max_person_m = 2.3f, max_width_m = 2.0f, max_depth_m = 1.2f;
   int max_people = 0;
   double max_fill = 0.8;
-  agex::apps::PipelineParams params;
+  agex::DepthPipelineParams params;
   // People anywhere in a room, not only at the Bonn distance.
   params.crop_min = Eigen::Vector3f (-6.f, -3.f, 0.5f);
   params.crop_max = Eigen::Vector3f (6.f, 3.f, 10.f);
@@ -375,7 +376,7 @@ annotateRgbd (int argc, char **argv)
           colour.at<cv::Vec3b> (v, u) = cv::Vec3b::all (static_cast<unsigned char> (grey));
         }
       }
-    const agex::apps::PipelineResult result = agex::apps::runDepthPipeline (xyz, params);
+    const agex::DepthPipelineResult result = agex::runDepthPipeline (xyz, params);
 
     // Candidates with their distance from the image centre: with --max-people, the most central
     // are kept (a camera looks at its subject; side walls and furniture sit at the edges).

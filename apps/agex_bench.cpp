@@ -6,14 +6,14 @@
 //   agex_bench --dataset DIR: the whole detector (pipeline, patches, classifier) on every
 //     frame of a dataset, stage by stage, on one core; then frames per second with --jobs.
 
-#include <agex/apps/body_parts.h>
 #include <agex/apps/command_line.h>
 #include <agex/apps/dataset_selection.h>
-#include <agex/apps/depth_pipeline.h>
+#include <agex/apps/pipeline_flags.h>
+#include <agex/detection/depth_pipeline.h>
 #include <agex/apps/output.h>
-#include <agex/classification/patch_classifier.h>
-#include <agex/common/atomic_file.h>
-#include <agex/common/frame_io.h>
+#include <agex/detection/body_part_detector.h>
+#include <agex/io/atomic_file.h>
+#include <agex/io/frame_io.h>
 #include <agex/keypoints/agex_keypoint.h>
 
 #include <boost/program_options.hpp>
@@ -57,7 +57,7 @@ statsJson (const Stats &s)
 
 /** Times one AGEX mode on fixed meshes; returns per-run milliseconds and the points. */
 std::vector<double>
-timeAgex (const Cloud::Ptr &cloud, const agex::apps::PipelineResult &prepared, const agex::apps::PipelineParams &params,
+timeAgex (const Cloud::Ptr &cloud, const agex::DepthPipelineResult &prepared, const agex::DepthPipelineParams &params,
           int k, bool naive, int repeat, pcl::PointCloud<agex::InterestPoint> &points)
 {
   using Keypoint = agex::AGEXKeypoint<pcl::PointXYZ, agex::InterestPoint>;
@@ -81,15 +81,15 @@ timeAgex (const Cloud::Ptr &cloud, const agex::apps::PipelineResult &prepared, c
 }
 
 nlohmann::json
-benchView (const std::string &label, const Cloud::Ptr &cloud, const agex::apps::PipelineParams &params, int k,
+benchView (const std::string &label, const Cloud::Ptr &cloud, const agex::DepthPipelineParams &params, int k,
            int repeat)
 {
   // The whole pipeline, stage by stage.
   std::map<std::string, std::vector<double>> stage_ms;
-  agex::apps::PipelineResult prepared;
+  agex::DepthPipelineResult prepared;
   for (int r = 0; r < repeat; ++r)
   {
-    prepared = agex::apps::runDepthPipeline (cloud, params);
+    prepared = agex::runDepthPipeline (cloud, params);
     for (const auto &[stage, ms] : prepared.ms)
       stage_ms[stage].push_back (ms);
   }
@@ -135,20 +135,19 @@ benchView (const std::string &label, const Cloud::Ptr &cloud, const agex::apps::
 
 /** Milliseconds of each detector stage on one frame, the cloud already in memory. */
 std::vector<std::pair<std::string, double>>
-timeDetector (const Cloud::ConstPtr &cloud, const agex::PatchClassifier &classifier,
-              const agex::apps::DetectorSettings &settings)
+timeDetector (const Cloud::ConstPtr &cloud, const agex::DetectorModel::ConstPtr &model)
 {
   const auto start = Clock::now ();
-  const auto prepared = agex::apps::runDepthPipeline (cloud, settings.pipeline);
-  double patch_ms = 0, classify_ms = 0;
-  agex::apps::detectBodyParts (prepared, classifier, settings.patch, &patch_ms, &classify_ms);
+  agex::BodyPartDetector<pcl::PointXYZ> detector;
+  detector.setModel (model);
+  detector.setInputCloud (cloud);
+  std::vector<agex::BodyPartDetection> detections;
+  detector.compute (detections);
   const double total = std::chrono::duration<double, std::milli> (Clock::now () - start).count ();
   std::vector<std::pair<std::string, double>> ms;
-  for (const auto &stage : prepared.ms)
+  for (const auto &stage : detector.getIntermediate ().ms)
     if (stage.first != "total")
       ms.push_back (stage);
-  ms.emplace_back ("patches", patch_ms);
-  ms.emplace_back ("classify", classify_ms);
   ms.emplace_back ("total", total);
   return ms;
 }
@@ -161,15 +160,14 @@ benchDataset (const std::string &spec, bool keyframes_only, const std::string &m
   const agex::apps::DatasetSelection selection = agex::apps::selectDataset (spec, keyframes_only);
   if (selection.frame_ids.empty ())
     throw std::runtime_error (spec + ": no frames selected");
-  const agex::PatchClassifier classifier = agex::PatchClassifier::load (model_path);
-  const agex::apps::DetectorSettings settings = agex::apps::DetectorSettings::fromJson (classifier.metadata ());
+  const auto model = std::make_shared<const agex::DetectorModel> (agex::DetectorModel::load (model_path));
 
   // Frames are loaded first: file I/O is not part of the detector.
   std::vector<Cloud::ConstPtr> clouds;
   for (const auto &id : selection.frame_ids)
     clouds.push_back (selection.dataset.loadFrame (id));
 
-  timeDetector (clouds.front (), classifier, settings);  // warm-up: caches, lazy allocations
+  timeDetector (clouds.front (), model);  // warm-up: caches, lazy allocations
   std::vector<std::string> stage_order;
   std::map<std::string, std::vector<double>> per_frame;  // stage -> one median per frame
   agex::apps::Progress progress ("frames", clouds.size ());
@@ -177,7 +175,7 @@ benchDataset (const std::string &spec, bool keyframes_only, const std::string &m
   {
     std::map<std::string, std::vector<double>> runs;
     for (int p = 0; p < passes; ++p)
-      for (const auto &[stage, ms] : timeDetector (clouds[f], classifier, settings))
+      for (const auto &[stage, ms] : timeDetector (clouds[f], model))
       {
         if (f == 0 && p == 0)
           stage_order.push_back (stage);
@@ -205,7 +203,7 @@ benchDataset (const std::string &spec, bool keyframes_only, const std::string &m
   const auto start = Clock::now ();
   jobs = agex::apps::runWorkers (jobs, clouds.size (), [&] () {
     for (std::size_t i = next++; i < clouds.size (); i = next++)
-      timeDetector (clouds[i], classifier, settings);
+      timeDetector (clouds[i], model);
   });
   const double seconds = std::chrono::duration<double> (Clock::now () - start).count ();
   const double fps = seconds > 0 ? clouds.size () / seconds : 0.0;
@@ -228,7 +226,7 @@ int
 main (int argc, char **argv)
 {
   agex::FrameOptions frame_options;
-  agex::apps::PipelineParams params;
+  agex::DepthPipelineParams params;
   std::vector<std::string> vector_flags, inputs;
   std::string json_path, dataset_spec, model_path = AGEX_BUNDLED_MODEL;
   int k = 20, repeat = 30, passes = 3, jobs = static_cast<int> (std::max (1u, std::thread::hardware_concurrency ()));

@@ -4,10 +4,11 @@
 //   agex_convert pcd  --input FILE|DIR... --output DIR
 
 #include <agex/apps/command_line.h>
-#include <agex/apps/depth_pipeline.h>
-#include <agex/common/bonn.h>
-#include <agex/common/dataset.h>
-#include <agex/common/frame_io.h>
+#include <agex/apps/pipeline_flags.h>
+#include <agex/detection/depth_pipeline.h>
+#include <agex/io/bonn.h>
+#include <agex/io/dataset.h>
+#include <agex/io/frame_io.h>
 
 #include <boost/program_options.hpp>
 

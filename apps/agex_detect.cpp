@@ -4,16 +4,15 @@
 // document. Several: JSON lines, one per frame, written as they finish, in parallel
 // with --jobs; a rerun with the same --json skips the frames already there.
 
-#include <agex/apps/body_parts.h>
 #include <agex/apps/command_line.h>
 #include <agex/apps/dataset_selection.h>
-#include <agex/apps/depth_pipeline.h>
+#include <agex/apps/pipeline_flags.h>
+#include <agex/detection/depth_pipeline.h>
 #include <agex/apps/output.h>
-#include <agex/apps/sliding_window.h>
-#include <agex/classification/patch_classifier.h>
-#include <agex/common/atomic_file.h>
-#include <agex/common/dataset.h>
-#include <agex/common/frame_io.h>
+#include <agex/detection/body_part_detector.h>
+#include <agex/io/atomic_file.h>
+#include <agex/io/dataset.h>
+#include <agex/io/frame_io.h>
 
 #include <boost/program_options.hpp>
 
@@ -150,8 +149,8 @@ framesDone (const std::string &path)
 }
 
 cv::Mat
-renderDetections (const agex::apps::PipelineResult &prepared, const pcl::PointCloud<pcl::PointXYZ> &frame,
-                  const std::vector<agex::apps::Detection> &detections, float min_confidence)
+renderDetections (const agex::DepthPipelineResult &prepared, const pcl::PointCloud<pcl::PointXYZ> &frame,
+                  const std::vector<agex::BodyPartDetection> &detections, float min_confidence)
 {
   cv::Mat image = agex::apps::renderOverlay (frame, prepared.meshes, pcl::PointCloud<agex::InterestPoint> ());
   const int scale = std::max (1, image.rows / static_cast<int> (std::max (1u, frame.height)));
@@ -159,10 +158,10 @@ renderDetections (const agex::apps::PipelineResult &prepared, const pcl::PointCl
   {
     if (it->confidence < min_confidence)
       continue;
-    const cv::Point centre ((it->point.u + 0.5) * scale, (it->point.v + 0.5) * scale);
+    const cv::Point centre ((it->u + 0.5) * scale, (it->v + 0.5) * scale);
     const cv::Scalar colour = agex::apps::bodyPartColour (static_cast<int> (it->part));
-    const cv::Point tip = centre + cv::Point (static_cast<int> (std::lround (it->point.orientation[0] * 40)),
-                                              static_cast<int> (std::lround (it->point.orientation[1] * 40)));
+    const cv::Point tip = centre + cv::Point (static_cast<int> (std::lround (it->orientation.x () * 40)),
+                                              static_cast<int> (std::lround (it->orientation.y () * 40)));
     if (tip != centre)
       cv::arrowedLine (image, centre, tip, colour, 2, cv::LINE_AA, 0, 0.3);
     cv::circle (image, centre, 9, colour, 3, cv::LINE_AA);
@@ -207,9 +206,8 @@ main (int argc, char **argv)
       throw std::runtime_error ("no INPUT given (see --help)");
     if (jobs < 1)
       throw std::runtime_error ("--jobs must be at least 1");
-    const agex::apps::DetectorModel model = agex::apps::loadDetectorModel (model_path, agex::apps::DetectorKind::Agex);
-    const agex::PatchClassifier &classifier = *model.classifier;
-    const agex::apps::DetectorSettings &settings = model.settings;
+    const auto model = std::make_shared<const agex::DetectorModel> (agex::DetectorModel::load (model_path));
+    model->requireKind (agex::DetectorKind::Agex, model_path);
     agex::InputFiles read ({model_path});
     const std::vector<Job> job_list = collectJobs (inputs, read);
     for (const auto &out : {json_path, overlay_path})
@@ -219,19 +217,20 @@ main (int argc, char **argv)
     auto process = [&] (const Job &job, nlohmann::json &doc, cv::Mat *overlay) {
       const auto start = std::chrono::steady_clock::now ();
       const agex::Frame frame = agex::loadFrame (job.path, frame_options);
-      const auto prepared = agex::apps::runDepthPipeline (frame.cloud, settings.pipeline);
-      double patch_ms = 0, classify_ms = 0;
-      const auto detections = agex::apps::detectBodyParts (prepared, classifier, settings.patch, &patch_ms, &classify_ms);
+      agex::BodyPartDetector<pcl::PointXYZ> detector;
+      detector.setModel (model);
+      detector.setInputCloud (frame.cloud);
+      std::vector<agex::BodyPartDetection> detections;
+      detector.compute (detections);
+      const agex::DepthPipelineResult &prepared = detector.getIntermediate ();
       doc = {{"frame", job.name}, {"width", frame.cloud->width}, {"height", frame.cloud->height},
              {"detections", nlohmann::json::array ()}};
       for (const auto &d : detections)
-        doc["detections"].push_back (agex::apps::detectionJson (d));
+        doc["detections"].push_back (agex::toJson (d));
       doc["ms"] = nlohmann::json::object ();
       for (const auto &[stage, ms] : prepared.ms)
         if (stage != "total")
           doc["ms"][stage] = ms;
-      doc["ms"]["patches"] = patch_ms;
-      doc["ms"]["classify"] = classify_ms;
       doc["ms"]["total"] = std::chrono::duration<double, std::milli> (std::chrono::steady_clock::now () - start).count ();
       if (overlay)
         *overlay = renderDetections (prepared, *frame.cloud, detections, min_confidence);

@@ -6,16 +6,17 @@
 // detect: precision and recall of the body-part detector.
 // compare: the AGEX detector against the sliding-window baseline (the paper's Fig. 7).
 
-#include <agex/apps/body_parts.h>
 #include <agex/apps/command_line.h>
 #include <agex/apps/dataset_selection.h>
-#include <agex/apps/coverage.h>
-#include <agex/apps/depth_pipeline.h>
+#include <agex/apps/pipeline_flags.h>
+#include <agex/detection/depth_pipeline.h>
 #include <agex/apps/output.h>
-#include <agex/apps/sliding_window.h>
-#include <agex/common/atomic_file.h>
-#include <agex/classification/patch_classifier.h>
-#include <agex/common/dataset.h>
+#include <agex/io/atomic_file.h>
+#include <agex/common/statistics.h>
+#include <agex/detection/body_part_detector.h>
+#include <agex/detection/coverage_evaluation.h>
+#include <agex/detection/detection_evaluation.h>
+#include <agex/io/dataset.h>
 
 #include <filesystem>
 
@@ -32,14 +33,14 @@ namespace po = boost::program_options;
 namespace
 {
 int
-evaluateCoverage (const agex::apps::DatasetSelection &selection, agex::apps::PipelineParams params, int k,
+evaluateCoverage (const agex::apps::DatasetSelection &selection, agex::DepthPipelineParams params, int k,
                   float radius, bool keyframes_only, bool details, const std::string &json_path,
                   const std::string &plot_path)
 {
   constexpr int kCurveMax = 20;
   const int max_k = std::max (k, kCurveMax);
   params.k = max_k + 1;  // the centroid and max_k extrema per mesh
-  agex::apps::CoverageEvaluation evaluation (max_k, radius);
+  agex::CoverageEvaluation evaluation (max_k, radius);
   evaluation.setDetailK (k);
 
   const agex::Dataset &dataset = selection.dataset;
@@ -50,7 +51,7 @@ evaluateCoverage (const agex::apps::DatasetSelection &selection, agex::apps::Pip
   for (std::size_t i = 0; i < ids.size (); ++i)
   {
     const auto cloud = dataset.loadFrame (ids[i]);
-    const agex::apps::PipelineResult result = agex::apps::runDepthPipeline (cloud, params);
+    const agex::DepthPipelineResult result = agex::runDepthPipeline (cloud, params);
     total_ms += result.ms.back ().second;
     meshes += result.meshes.size ();
     evaluation.addFrame (result.interest_points, dataset.labelsOf (ids[i]));
@@ -102,7 +103,7 @@ evaluateCoverage (const agex::apps::DatasetSelection &selection, agex::apps::Pip
 }
 /** Adds the precision-recall curve of one class to a plot. */
 void
-addPrecisionRecall (agex::apps::Plot &plot, const agex::apps::DetectionEvaluation &evaluation, agex::BodyPart part,
+addPrecisionRecall (agex::apps::Plot &plot, const agex::DetectionEvaluation &evaluation, agex::BodyPart part,
                     const std::string &label, const cv::Scalar &colour)
 {
   char name[96];
@@ -113,29 +114,22 @@ addPrecisionRecall (agex::apps::Plot &plot, const agex::apps::DetectionEvaluatio
   plot.series.push_back (series);
 }
 
+/** The median of frame times (0 for no frames: a count, not a missing value). */
 double
-msSince (std::chrono::steady_clock::time_point start)
+medianMs (const std::vector<double> &ms)
 {
-  return std::chrono::duration<double, std::milli> (std::chrono::steady_clock::now () - start).count ();
-}
-
-double
-median (std::vector<double> v)
-{
-  if (v.empty ())
-    return 0.0;
-  std::sort (v.begin (), v.end ());
-  return v[v.size () / 2];
+  return ms.empty () ? 0.0 : agex::median (ms);
 }
 
 int
 evaluateDetection (const agex::apps::DatasetSelection &selection, const std::string &model_path, float radius,
                    const std::string &json_path, const std::string &plots_dir)
 {
-  const agex::apps::DetectorModel model = agex::apps::loadDetectorModel (model_path, agex::apps::DetectorKind::Agex);
-  const agex::PatchClassifier &classifier = *model.classifier;
-  const agex::apps::DetectorSettings &settings = model.settings;
-  agex::apps::DetectionEvaluation evaluation (radius);
+  const auto model = std::make_shared<const agex::DetectorModel> (agex::DetectorModel::load (model_path));
+  model->requireKind (agex::DetectorKind::Agex, model_path);
+  agex::BodyPartDetector<pcl::PointXYZ> detector;
+  detector.setModel (model);
+  agex::DetectionEvaluation evaluation (radius);
   agex::apps::Progress progress ("evaluated", selection.frame_ids.size ());
   std::vector<double> frame_ms;
   for (std::size_t i = 0; i < selection.frame_ids.size (); ++i)
@@ -143,9 +137,10 @@ evaluateDetection (const agex::apps::DatasetSelection &selection, const std::str
     const auto &id = selection.frame_ids[i];
     const auto cloud = selection.dataset.loadFrame (id);
     const auto start = std::chrono::steady_clock::now ();
-    const auto prepared = agex::apps::runDepthPipeline (cloud, settings.pipeline);
-    const auto detections = agex::apps::detectBodyParts (prepared, classifier, settings.patch);
-    frame_ms.push_back (msSince (start));
+    detector.setInputCloud (cloud);
+    std::vector<agex::BodyPartDetection> detections;
+    detector.compute (detections);
+    frame_ms.push_back (agex::msSince (start));
     evaluation.addFrame (detections, selection.dataset.labelsOf (id));
     progress.step (i + 1);
   }
@@ -153,7 +148,7 @@ evaluateDetection (const agex::apps::DatasetSelection &selection, const std::str
   nlohmann::json doc = evaluation.report (kConfusionThreshold);
   doc["dataset"] = selection.dataset.directory ();
   doc["model"] = model_path;
-  doc["ms_per_frame_median"] = median (frame_ms);
+  doc["ms_per_frame_median"] = medianMs (frame_ms);
   if (!json_path.empty ())
     agex::apps::writeJson (json_path, doc);
   std::cout << selection.dataset.directory () << ": " << selection.frame_ids.size () << " frames\n";
@@ -184,14 +179,14 @@ evaluateDetection (const agex::apps::DatasetSelection &selection, const std::str
 struct Contender
 {
   Contender (float min_iou, float focal, float radius)
-    : by_overlap (agex::apps::DetectionEvaluation::boxOverlap (min_iou, focal)), by_distance (radius)
+    : by_overlap (agex::DetectionEvaluation::boxOverlap (min_iou, focal)), by_distance (radius)
   {
   }
-  agex::apps::DetectionEvaluation by_overlap, by_distance;
+  agex::DetectionEvaluation by_overlap, by_distance;
   std::vector<double> frame_ms;
   double detections = 0.0, patches = 0.0;
 
-  void add (const std::vector<agex::apps::Detection> &detections_found, const std::vector<agex::PartLabel> &labels,
+  void add (const std::vector<agex::BodyPartDetection> &detections_found, const std::vector<agex::PartLabel> &labels,
             double ms, std::size_t patches_classified)
   {
     patches += static_cast<double> (patches_classified);
@@ -210,7 +205,7 @@ struct Contender
       doc["ap"]["iou"][agex::bodyPartName (part)] = number (by_overlap.averagePrecision (part));
       doc["ap"]["distance"][agex::bodyPartName (part)] = number (by_distance.averagePrecision (part));
     }
-    doc["ms_per_frame"] = median (frame_ms);
+    doc["ms_per_frame"] = medianMs (frame_ms);
     doc["detections_per_frame"] = frame_ms.empty () ? 0.0 : detections / frame_ms.size ();
     // What the time mostly buys, and unlike it independent of the machine's load.
     doc["patches_classified_per_frame"] = frame_ms.empty () ? 0.0 : patches / frame_ms.size ();
@@ -220,22 +215,28 @@ struct Contender
 
 int
 compareDetectors (const agex::apps::DatasetSelection &selection, const std::string &agex_model_path,
-                  const std::string &sw_model_path, const agex::apps::SlidingWindowParams &window_override,
+                  const std::string &sw_model_path, const agex::SlidingWindowParams &window_override,
                   float radius, float min_iou, const std::string &json_path, const std::string &plots_dir)
 {
-  using agex::apps::DetectorKind;
-  const agex::apps::DetectorModel agex_model = agex::apps::loadDetectorModel (agex_model_path, DetectorKind::Agex);
-  agex::apps::DetectorModel sw_model = agex::apps::loadDetectorModel (sw_model_path, DetectorKind::SlidingWindow);
+  const auto agex_model = std::make_shared<const agex::DetectorModel> (agex::DetectorModel::load (agex_model_path));
+  agex_model->requireKind (agex::DetectorKind::Agex, agex_model_path);
+  const auto sw_model = std::make_shared<const agex::DetectorModel> (agex::DetectorModel::load (sw_model_path));
+  sw_model->requireKind (agex::DetectorKind::SlidingWindow, sw_model_path);
+  agex::BodyPartDetector<pcl::PointXYZ> agex_detector, sw_detector;
+  agex_detector.setModel (agex_model);
+  sw_detector.setModel (sw_model);
+  agex::DetectorSettings sw_settings = sw_model->settings ();
   if (window_override.stride > 0)
-    sw_model.settings.sliding_window.stride = window_override.stride;
+    sw_settings.sliding_window.stride = window_override.stride;
   if (!window_override.scales.empty ())
-    sw_model.settings.sliding_window.scales = window_override.scales;
+    sw_settings.sliding_window.scales = window_override.scales;
+  sw_detector.setSettings (sw_settings);
   const float focal = static_cast<float> (selection.dataset.info ().intrinsics.fx);
   if (!(focal > 0.f))
     throw std::runtime_error (selection.dataset.directory () + ": the dataset has no focal length (intrinsics.fx)");
   constexpr int kContainmentK = 5;
   Contender agex_side (min_iou, focal, radius), sw_side (min_iou, focal, radius);
-  agex::apps::CoverageEvaluation containment (kContainmentK, radius);
+  agex::CoverageEvaluation containment (kContainmentK, radius);
 
   agex::apps::Progress progress ("compared", selection.frame_ids.size ());
   for (std::size_t i = 0; i < selection.frame_ids.size (); ++i)
@@ -245,22 +246,21 @@ compareDetectors (const agex::apps::DatasetSelection &selection, const std::stri
     const auto labels = selection.dataset.labelsOf (id);
 
     auto start = std::chrono::steady_clock::now ();
-    const auto prepared = agex::apps::runDepthPipeline (cloud, agex_model.settings.pipeline);
-    const auto found = agex::apps::detectBodyParts (prepared, *agex_model.classifier, agex_model.settings.patch);
-    agex_side.add (found, labels, msSince (start), prepared.interest_points.size ());
-    containment.addFrame (prepared.interest_points, labels);
+    std::vector<agex::BodyPartDetection> found, windows_found;
+    agex_detector.setInputCloud (cloud);
+    agex_detector.compute (found);
+    agex_side.add (found, labels, agex::msSince (start), agex_detector.getPatchesClassified ());
+    containment.addFrame (agex_detector.getIntermediate ().interest_points, labels);
 
     start = std::chrono::steady_clock::now ();
-    const auto prepared_sw = agex::apps::runDepthPipeline (cloud, sw_model.settings.pipeline);
-    std::size_t frame_windows = 0;
-    const auto windows_found =
-        agex::apps::detectBodyPartsSlidingWindow (prepared_sw, sw_model.classifier, sw_model.settings, &frame_windows);
-    double ms = msSince (start);
+    sw_detector.setInputCloud (cloud);
+    sw_detector.compute (windows_found);
+    double ms = agex::msSince (start);
     // The pipeline also ran AGEX, which the baseline does not need: not its time.
-    for (const auto &[stage, stage_ms] : prepared_sw.ms)
+    for (const auto &[stage, stage_ms] : sw_detector.getIntermediate ().ms)
       if (stage == "agex")
         ms -= stage_ms;
-    sw_side.add (windows_found, labels, ms, frame_windows);
+    sw_side.add (windows_found, labels, ms, sw_detector.getPatchesClassified ());
     progress.step (i + 1);
   }
 
@@ -270,16 +270,16 @@ compareDetectors (const agex::apps::DatasetSelection &selection, const std::stri
   doc["frames"] = frames;
   doc["criteria"] = {{"iou", {{"min_iou", min_iou},
                               {"focal_length_px", focal},
-                              {"box_side_m", {{"head", agex::apps::partBoxSide (agex::BodyPart::Head)},
-                                              {"hand", agex::apps::partBoxSide (agex::BodyPart::Hand)},
-                                              {"foot", agex::apps::partBoxSide (agex::BodyPart::Foot)}}}}},
+                              {"box_side_m", {{"head", agex::partBoxSide (agex::BodyPart::Head)},
+                                              {"hand", agex::partBoxSide (agex::BodyPart::Hand)},
+                                              {"foot", agex::partBoxSide (agex::BodyPart::Foot)}}}}},
                      {"distance", {{"radius_m", radius}}}};
   doc["agex"] = agex_side.report ();
   doc["agex"]["model"] = agex_model_path;
   doc["sliding_window"] = sw_side.report ();
   doc["sliding_window"]["model"] = sw_model_path;
-  doc["sliding_window"]["stride_px"] = sw_model.settings.sliding_window.stride;
-  doc["sliding_window"]["scales"] = sw_model.settings.sliding_window.scales;
+  doc["sliding_window"]["stride_px"] = sw_settings.sliding_window.stride;
+  doc["sliding_window"]["scales"] = sw_settings.sliding_window.scales;
   for (int c = 0; c < agex::kBodyPartCount; ++c)
   {
     const auto part = static_cast<agex::BodyPart> (c);
@@ -296,7 +296,7 @@ compareDetectors (const agex::apps::DatasetSelection &selection, const std::stri
   for (const auto *side : {&agex_side, &sw_side})
   {
     std::printf ("  %-14s %7.1f ms/frame %6.0f patches/frame  AP IoU>%.2f:",
-                 side == &agex_side ? "AGEX" : "sliding window", median (side->frame_ms),
+                 side == &agex_side ? "AGEX" : "sliding window", medianMs (side->frame_ms),
                  side->patches / std::max<std::size_t> (1, frames), min_iou);
     for (const auto part : {agex::BodyPart::Head, agex::BodyPart::Hand, agex::BodyPart::Foot})
       std::printf (" %s %.3f", agex::bodyPartName (part), side->by_overlap.averagePrecision (part));
@@ -341,13 +341,13 @@ compareDetectors (const agex::apps::DatasetSelection &selection, const std::stri
 int
 main (int argc, char **argv)
 {
-  agex::apps::PipelineParams params;
+  agex::DepthPipelineParams params;
   std::vector<std::string> vector_flags;
   std::string mode, dataset_dir, json_path, plot_path, plots_dir, model_path = AGEX_BUNDLED_MODEL,
                                                                     agex_model_path = AGEX_BUNDLED_MODEL,
                                                                     sw_model_path = AGEX_BUNDLED_SW_MODEL;
   float min_iou = 0.5f;
-  agex::apps::SlidingWindowParams window_override;
+  agex::SlidingWindowParams window_override;
   window_override.stride = 0;
   window_override.scales.clear ();
   int k = 5;

@@ -3,10 +3,11 @@
 // writes the points as JSON and an overlay PNG.
 
 #include <agex/apps/command_line.h>
-#include <agex/apps/depth_pipeline.h>
+#include <agex/apps/pipeline_flags.h>
+#include <agex/detection/depth_pipeline.h>
 #include <agex/apps/output.h>
-#include <agex/common/atomic_file.h>
-#include <agex/common/frame_io.h>
+#include <agex/io/atomic_file.h>
+#include <agex/io/frame_io.h>
 
 #include <boost/program_options.hpp>
 
@@ -18,7 +19,7 @@ int
 main (int argc, char **argv)
 {
   agex::FrameOptions frame_options;
-  agex::apps::PipelineParams params;
+  agex::DepthPipelineParams params;
   std::vector<std::string> vector_flags;
   std::string input, json_path, overlay_path;
 
@@ -45,7 +46,7 @@ main (int argc, char **argv)
         agex::checkOutputIsNotInput (out, {input});
 
     const agex::Frame frame = agex::loadFrame (input, frame_options);
-    const agex::apps::PipelineResult result = agex::apps::runDepthPipeline (frame.cloud, params);
+    const agex::DepthPipelineResult result = agex::runDepthPipeline (frame.cloud, params);
 
     nlohmann::json doc;
     doc["frame"] = input;

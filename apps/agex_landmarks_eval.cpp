@@ -4,7 +4,7 @@
 #include <agex/apps/command_line.h>
 #include <agex/apps/landmarks.h>
 #include <agex/apps/output.h>
-#include <agex/common/atomic_file.h>
+#include <agex/io/atomic_file.h>
 
 #include <boost/program_options.hpp>
 

@@ -3,8 +3,8 @@
 // same bytes.
 
 #include <agex/apps/command_line.h>
-#include <agex/common/atomic_file.h>
-#include <agex/common/synthetic_scene.h>
+#include <agex/io/atomic_file.h>
+#include <agex/simulation/synthetic_scene.h>
 
 #include <boost/program_options.hpp>
 

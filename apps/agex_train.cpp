@@ -3,13 +3,14 @@
 // default) or for the sliding-window baseline (--sliding-window).
 //   agex_train --dataset DIR[@SEQ,...] [--dataset ...] --out MODEL [--sliding-window] [options]
 
-#include <agex/apps/body_parts.h>
 #include <agex/apps/command_line.h>
 #include <agex/apps/dataset_selection.h>
-#include <agex/apps/depth_pipeline.h>
-#include <agex/apps/sliding_window.h>
+#include <agex/apps/pipeline_flags.h>
+#include <agex/detection/depth_pipeline.h>
 #include <agex/classification/patch_classifier.h>
-#include <agex/common/atomic_file.h>
+#include <agex/detection/detector_model.h>
+#include <agex/detection/training_samples.h>
+#include <agex/io/atomic_file.h>
 
 #include <boost/program_options.hpp>
 
@@ -24,9 +25,12 @@ namespace po = boost::program_options;
 int
 main (int argc, char **argv)
 {
-  agex::apps::PipelineParams params;
+  agex::DepthPipelineParams params;
   params.k = 11;  // the centroid and 10 extrema per mesh: positives and hard negatives
-  agex::apps::PatchParams patch;
+  agex::PatchGeometry patch;
+  patch.size = 41;
+  patch.extent = 0.6f;
+  patch.clamp = 0.3f;
   agex::PatchClassifierParams classifier_params;
   std::vector<std::string> vector_flags, datasets;
   std::string out;
@@ -34,7 +38,7 @@ main (int argc, char **argv)
   float radius = 0.10f;
   bool keyframes = false, sliding_window = false;
   std::uint64_t seed = 1;
-  agex::apps::SlidingWindowParams windows;
+  agex::SlidingWindowParams windows;
   int window_negatives = 40, jitter = 3;
   float jitter_radius = 0.04f;
 
@@ -118,12 +122,12 @@ main (int argc, char **argv)
         const auto labels = selection.dataset.labelsOf (id);
         if (labels.empty ())
           continue;  // unlabelled frames say nothing about where parts are
-        const auto prepared = agex::apps::runDepthPipeline (selection.dataset.loadFrame (id), params);
+        const auto prepared = agex::runDepthPipeline (selection.dataset.loadFrame (id), params);
         if (sliding_window)
-          agex::apps::collectWindowTrainingSamples (prepared, labels, radius, jitter, jitter_radius, window_negatives,
+          agex::collectWindowTrainingSamples (prepared, labels, radius, jitter, jitter_radius, window_negatives,
                                                     patch, rng, patches, classes);
         else
-          agex::apps::collectTrainingSamples (prepared, labels, radius, random_negatives, patch, rng, patches,
+          agex::collectTrainingSamples (prepared, labels, radius, random_negatives, patch, rng, patches,
                                               classes);
         ++frames;
         progress.step (i + 1);
@@ -141,31 +145,25 @@ main (int argc, char **argv)
       std::cerr << "  boosted class " << done << "/" << total << "\n";
     });
     const double seconds = std::chrono::duration<double> (std::chrono::steady_clock::now () - start).count ();
-    agex::PatchGeometry geometry;
-    geometry.size = patch.size;
-    geometry.extent = patch.extent;
-    geometry.clamp = patch.clamp;
-    classifier.setPatchGeometry (geometry);
+    classifier.setPatchGeometry (patch);
 
-    agex::apps::DetectorSettings settings;
+    agex::DetectorSettings settings;
     settings.pipeline = params;
-    settings.patch = patch;
     if (sliding_window)
     {
-      settings.detector = agex::apps::DetectorKind::SlidingWindow;
+      settings.kind = agex::DetectorKind::SlidingWindow;
       settings.sliding_window = windows;
     }
     std::ostringstream command;
     for (int i = 0; i < argc; ++i)
       command << (i ? " " : "") << argv[i];
-    nlohmann::json metadata = settings.toJson ();
-    metadata["training"] = {{"command", command.str ()},
+    const nlohmann::json training = {{"command", command.str ()},
                             {"datasets", sources},
                             {"frames", frames},
                             {"patches", {{"head", counts[0]}, {"hand", counts[1]}, {"foot", counts[2]}, {"background", counts[3]}}},
                             {"radius_m", radius},
                             {"seconds", seconds}};
-    classifier.save (out, metadata);
+    agex::DetectorModel (std::make_shared<const agex::PatchClassifier> (std::move (classifier)), settings).save (out, training);
     std::cout << out << ": trained in " << seconds << " s\n";
     return 0;
   }

@@ -1,6 +1,6 @@
 #include <agex/classification/patch_classifier.h>
 
-#include <agex/common/atomic_file.h>
+#include <agex/io/atomic_file.h>
 
 #include "checked_read.h"
 

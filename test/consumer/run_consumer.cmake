@@ -55,7 +55,7 @@ if(NOT config)
 endif()
 get_filename_component(config_dir "${config}" DIRECTORY)
 foreach(file include/agex/keypoints/agex_keypoint.h include/agex/keypoints/impl/agex_keypoint.hpp
-             include/agex/common/frame_io.h bin/agex_detect share/agex/models/agex_bonn.yml)
+             include/agex/io/frame_io.h bin/agex_detect share/agex/models/agex_bonn.yml)
   if(NOT EXISTS ${prefix}/${file})
     message(FATAL_ERROR "${file} was not installed")
   endif()

@@ -4,7 +4,7 @@
 // give a dataset or an agex::DatasetError.
 #include "fuzz_support.h"
 
-#include <agex/common/dataset.h>
+#include <agex/io/dataset.h>
 
 #include <nlohmann/json.hpp>
 

@@ -3,7 +3,7 @@
 // is the file. Any input must give a frame or an agex::FrameError.
 #include "fuzz_support.h"
 
-#include <agex/common/frame_io.h>
+#include <agex/io/frame_io.h>
 
 extern "C" int
 LLVMFuzzerTestOneInput (const std::uint8_t *data, std::size_t size)

@@ -2,7 +2,7 @@
 // input must give a dataset or a std::runtime_error naming the file.
 #include "fuzz_support.h"
 
-#include <agex/classification/imglab_dataset.h>
+#include <agex/landmarks/imglab_dataset.h>
 
 #include <stdexcept>
 

@@ -2,7 +2,7 @@
 // or an agex::DatasetError.
 #include "fuzz_support.h"
 
-#include <agex/common/dataset.h>
+#include <agex/io/dataset.h>
 
 extern "C" int
 LLVMFuzzerTestOneInput (const std::uint8_t *data, std::size_t size)

@@ -1,7 +1,7 @@
 #include <agex/apps/landmarks.h>
 
-#include <agex/classification/contour_annotation.h>
-#include <agex/common/frame_io.h>
+#include <agex/landmarks/contour_annotation.h>
+#include <agex/io/frame_io.h>
 
 #include <boost/program_options/value_semantic.hpp>
 #include <opencv2/imgcodecs.hpp>

@@ -1,6 +1,6 @@
 #include <agex/apps/output.h>
 
-#include <agex/common/atomic_file.h>
+#include <agex/io/atomic_file.h>
 
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>

@@ -9,8 +9,8 @@
 // there (the tutorial's pictures).
 
 #include <agex/classification/patch_classifier.h>
-#include <agex/common/dataset.h>
-#include <agex/common/frame_io.h>
+#include <agex/io/dataset.h>
+#include <agex/io/frame_io.h>
 #include <agex/features/depth_patch_estimation.h>
 #include <agex/filters/depth_median_filter.h>
 #include <agex/filters/mixed_pixel_filter.h>

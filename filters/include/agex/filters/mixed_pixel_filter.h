@@ -69,25 +69,21 @@ public:
 
   /** True if the point at index of the input cloud is a mixed pixel by the criterion
     * above (setInputCloud first). */
-  bool isMixedPixel (int index)
-  {
-    cos_max_veil_angle_ = std::cos (max_veil_angle_deg_ * static_cast<float> (M_PI) / 180.f);
-    return isMixed (index, nullptr);
-  }
+  bool isMixedPixel (int index) const { return isMixed (index, nullptr, cosMaxVeilAngle ()); }
 
 protected:
   void applyFilter (pcl::Indices &indices) override;
 
 private:
   /** The test, with the points' ranges precomputed (or nullptr to compute them). */
-  bool isMixed (int index, const float *ranges) const;
+  bool isMixed (int index, const float *ranges, float cos_max_veil_angle) const;
+  float cosMaxVeilAngle () const { return std::cos (max_veil_angle_deg_ * static_cast<float> (M_PI) / 180.f); }
 
   int window_radius_ = 2;
   float min_jump_ = 0.05f;
   float max_veil_angle_deg_ = 15.f;
   float interior_margin_ = 0.1f;
   std::vector<float> ranges_;  // per run: distance of each point from the sensor
-  float cos_max_veil_angle_ = 0.f;
 };
 }  // namespace agex
 

@@ -37,8 +37,9 @@ namespace agex
   * Output: one point per interest point, meshes in order and ranks 1..k within a
   * mesh; getKeypointsIndices() gives their indices in the input cloud. With
   * agex::InterestPoint as output type every field is filled; for other types the
-  * fields with matching names (x, y, z, ...) are. An unorganized input is an error
-  * (empty output); empty or all-NaN frames give an empty output.
+  * fields with matching names (x, y, z, ...) are. An unorganized input or a bad parameter
+  * is an error (PCL_ERROR, no keypoint indices; pcl::Keypoint::compute leaves the output
+  * untouched then); empty or all-NaN frames give an empty output.
   */
 template <typename PointInT, typename PointOutT = agex::InterestPoint>
 class AGEXKeypoint : public pcl::Keypoint<PointInT, PointOutT>
@@ -92,14 +93,6 @@ public:
   /** The meshes used by the last compute(). */
   const std::vector<pcl::PointIndices> &getMeshes () const { return meshes_; }
 
-  /** Runs the detector; output is cleared first, so it is empty after an error. */
-  void compute (PointCloudOut &output)
-  {
-    output.clear ();
-    keypoints_indices_.reset (new pcl::PointIndices);
-    pcl::Keypoint<PointInT, PointOutT>::compute (output);
-  }
-
 protected:
   using pcl::Keypoint<PointInT, PointOutT>::name_;
   using pcl::Keypoint<PointInT, PointOutT>::input_;
@@ -107,7 +100,10 @@ protected:
   using pcl::Keypoint<PointInT, PointOutT>::keypoints_indices_;
   using pcl::Keypoint<PointInT, PointOutT>::getClassName;
 
-  /** Checks input and parameters; no search tree is needed (the grid is the graph). */
+  /** Resets the last run's keypoint indices (so they are empty after an error, however
+    * compute () is reached), then checks input and parameters; no search tree is needed
+    * (the grid is the graph). pcl::Keypoint::compute leaves the output cloud as it was
+    * when this fails. */
   bool initCompute () override;
   void detectKeypoints (PointCloudOut &output) override;
 

@@ -2,7 +2,7 @@
 // "--dataset DIR[@SEQ,SEQ,...]": a dataset directory, optionally restricted to some
 // of its sequences (split train and test data by sequence, never by frame).
 
-#include <agex/common/dataset.h>
+#include <agex/io/dataset.h>
 
 #include <string>
 #include <vector>

@@ -2,9 +2,9 @@
 // Code the 2D landmark apps share: annotated datasets in memory, trainer flags,
 // evaluation and overlays. Kept out of agex_app_support so that the depth apps need no dlib.
 
-#include <agex/classification/contour_shape_predictor.h>
-#include <agex/classification/imglab_dataset.h>
-#include <agex/classification/people_detector.h>
+#include <agex/landmarks/contour_shape_predictor.h>
+#include <agex/landmarks/imglab_dataset.h>
+#include <agex/landmarks/people_detector.h>
 
 #include <boost/program_options/options_description.hpp>
 #include <nlohmann/json.hpp>

@@ -7,7 +7,7 @@
 #include <limits>
 
 template <typename PointT> bool
-agex::MixedPixelFilter<PointT>::isMixed (int index, const float *ranges) const
+agex::MixedPixelFilter<PointT>::isMixed (int index, const float *ranges, float cos_max_veil_angle) const
 {
   const PointCloud &cloud = *input_;
   const PointT &p = cloud[index];
@@ -44,7 +44,7 @@ agex::MixedPixelFilter<PointT>::isMixed (int index, const float *ranges) const
         continue;
       const Eigen::Vector3f across = q2.getVector3fMap () - q1.getVector3fMap ();
       const float len = across.norm ();
-      if (len > 0.f && std::abs (across.dot (ray)) >= cos_max_veil_angle_ * len)
+      if (len > 0.f && std::abs (across.dot (ray)) >= cos_max_veil_angle * len)
         return true;
     }
   return false;
@@ -70,7 +70,7 @@ agex::MixedPixelFilter<PointT>::applyFilter (pcl::Indices &indices)
                getClassName ().c_str (), window_radius_, min_jump_, max_veil_angle_deg_, interior_margin_);
     return;
   }
-  cos_max_veil_angle_ = std::cos (max_veil_angle_deg_ * static_cast<float> (M_PI) / 180.f);
+  const float cos_max_veil_angle = cosMaxVeilAngle ();
   // Each point's range is needed by up to 16 tests of its neighbours: compute it once,
   // NaN for a non-finite point (what isMixed relies on to skip it).
   ranges_.resize (input_->size ());
@@ -84,7 +84,7 @@ agex::MixedPixelFilter<PointT>::applyFilter (pcl::Indices &indices)
   for (const auto index : *indices_)
   {
     const bool finite = isFinitePoint ((*input_)[index]);
-    const bool keep = finite && (isMixed (index, ranges_.data ()) == negative_);
+    const bool keep = finite && (isMixed (index, ranges_.data (), cos_max_veil_angle) == negative_);
     if (keep)
       indices.push_back (index);
     else if (extract_removed_indices_)

@@ -12,6 +12,7 @@
 template <typename PointInT, typename PointOutT> bool
 agex::AGEXKeypoint<PointInT, PointOutT>::initCompute ()
 {
+  keypoints_indices_.reset (new pcl::PointIndices);
   if (!pcl::PCLBase<PointInT>::initCompute ())
   {
     PCL_ERROR ("[agex::%s::initCompute] No input cloud was given.\n", getClassName ().c_str ());

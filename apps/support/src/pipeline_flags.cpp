@@ -1,0 +1,159 @@
+#include <agex/apps/pipeline_flags.h>
+
+#include <boost/program_options.hpp>
+
+#include <cmath>
+#include <map>
+#include <sstream>
+#include <stdexcept>
+
+namespace po = boost::program_options;
+
+namespace agex
+{
+namespace apps
+{
+namespace
+{
+Eigen::Vector3f
+parseVector (const std::string &flag, const std::string &text)
+{
+  std::stringstream in (text);
+  Eigen::Vector3f v;
+  char c1 = 0, c2 = 0;
+  if (!(in >> v.x () >> c1 >> v.y () >> c2 >> v.z ()) || c1 != ',' || c2 != ',' || !(in >> std::ws).eof () ||
+      !v.allFinite ())
+    throw std::runtime_error ("--" + flag + ": expected three numbers as x,y,z, got '" + text + "'");
+  return v;
+}
+
+/** A float flag whose default prints as written (0.05, not 0.0500000007). */
+po::typed_value<float> *
+floatValue (float *target)
+{
+  std::ostringstream text;
+  text << *target;
+  return po::value (target)->default_value (*target, text.str ());
+}
+
+std::string
+formatVector (const Eigen::Vector3f &v)
+{
+  std::ostringstream out;
+  out << v.x () << "," << v.y () << "," << v.z ();
+  return out.str ();
+}
+}  // namespace
+
+po::options_description
+frameOptionsDescription (FrameOptions &options)
+{
+  // Checked as they are parsed: a NaN focal length would give empty frames, not an error.
+  const auto positive = [] (const char *name) {
+    return [name] (double v) {
+      if (!(v > 0.0) || !std::isfinite (v))
+        throw std::runtime_error (std::string ("--") + name + " must be a positive number");
+    };
+  };
+  const auto finite = [] (const char *name) {
+    return [name] (double v) {
+      if (!std::isfinite (v))
+        throw std::runtime_error (std::string ("--") + name + " must be a finite number");
+    };
+  };
+  po::options_description desc ("Frame input (depth images; defaults: Kinect, see ../shared/README.md)");
+  desc.add_options ()
+    ("fx", po::value (&options.intrinsics.fx)->default_value (options.intrinsics.fx)->notifier (positive ("fx")),
+     "focal length x, pixels")
+    ("fy", po::value (&options.intrinsics.fy)->default_value (options.intrinsics.fy)->notifier (positive ("fy")),
+     "focal length y, pixels")
+    ("cx", po::value (&options.intrinsics.cx)->default_value (options.intrinsics.cx)->notifier (finite ("cx")),
+     "principal point x, pixels")
+    ("cy", po::value (&options.intrinsics.cy)->default_value (options.intrinsics.cy)->notifier (finite ("cy")),
+     "principal point y, pixels")
+    ("depth-scale", po::value (&options.depth_scale)->default_value (0.0, "auto")->notifier ([] (double v) {
+       if (!(v >= 0.0) || !std::isfinite (v))
+         throw std::runtime_error ("--depth-scale must be a positive number of metres per depth unit");
+     }),
+     "metres per depth unit; auto: 0.016 for 8-bit PNG (Bonn), 0.001 for 16-bit PNG and .u16")
+    ("width", po::value (&options.width)->default_value (options.width), "width of a raw .u16 frame")
+    ("height", po::value (&options.height)->default_value (options.height), "height of a raw .u16 frame");
+  return desc;
+}
+
+po::options_description
+pipelineOptionsDescription (DepthPipelineParams &p, std::vector<std::string> &storage)
+{
+  storage.assign (3, std::string ());
+  storage[0] = formatVector (p.crop_min);
+  storage[1] = formatVector (p.crop_max);
+  storage[2] = formatVector (p.up);
+  po::options_description desc ("Pipeline (defaults isolate a person 1.3-2.6 m in front of the sensor,\n"
+                                 "within 0.75 m of its optical axis, as in the Bonn frames)");
+  desc.add_options ()
+    ("k", po::value (&p.k)->default_value (p.k), "AGEX points per mesh, centroid included")
+    ("delta-connected", floatValue (&p.delta_connected),
+     "largest 3D gap between connected neighbour pixels, metres")
+    ("delta-orient", floatValue (&p.delta_orient),
+     "geodesic distance traced back for orientations, metres")
+    ("min-mesh-size", po::value (&p.min_mesh_size)->default_value (p.min_mesh_size, "auto"),
+     "smallest mesh in points; auto: 0.1% of the frame's pixels")
+    ("median-window", po::value (&p.median_window)->default_value (p.median_window),
+     "median filter window in pixels (0 or 1: off)")
+    ("median-max-movement", floatValue (&p.median_max_movement),
+     "largest depth change the median may make, metres")
+    ("no-mixed-pixel-removal", po::bool_switch ()->notifier ([&p] (bool off) { p.remove_mixed_pixels = !off; }),
+     "keep mixed pixels")
+    ("mixed-window", po::value (&p.mixed_window_radius)->default_value (p.mixed_window_radius),
+     "mixed-pixel neighbour radius, pixels")
+    ("mixed-min-jump", floatValue (&p.mixed_min_jump),
+     "smallest depth jump with mixed pixels, metres")
+    ("mixed-max-angle", floatValue (&p.mixed_max_veil_angle_deg),
+     "largest angle between a jump and the viewing ray, degrees")
+    ("crop-min", po::value (&storage[0])->default_value (storage[0]), "bounding box minimum x,y,z, metres")
+    ("crop-max", po::value (&storage[1])->default_value (storage[1]), "bounding box maximum x,y,z, metres")
+    ("no-floor-removal", po::bool_switch ()->notifier ([&p] (bool off) { p.remove_floor = !off; }),
+     "keep the floor")
+    ("up", po::value (&storage[2])->default_value (storage[2]), "the world's up direction in camera axes")
+    ("floor-max-tilt", floatValue (&p.floor_max_tilt_deg),
+     "largest angle between the floor normal and up, degrees")
+    ("floor-distance", floatValue (&p.floor_distance),
+     "points closer than this to the floor plane are removed, metres")
+    ("naive", po::bool_switch (&p.naive), "reference AGEX: a full Dijkstra per point")
+    ("spur-iterations", po::value (&p.spur_iterations)->default_value (p.spur_iterations, "auto"),
+     "erosion passes removing spurs and ragged edges (0: off); auto: --spur-depth over the point spacing")
+    ("spur-depth", floatValue (&p.spur_depth), "metres of ragged edge the auto erosion takes")
+    ("spur-min-connected", po::value (&p.spur_min_connected)->default_value (p.spur_min_connected),
+     "connected 8-neighbours a point needs to survive a pass");
+  return desc;
+}
+
+std::string
+pipelineFlagName (const std::string &key)
+{
+  static const std::map<std::string, std::string> flags = {
+      {"median_window", "median-window"},       {"median_max_movement", "median-max-movement"},
+      {"mixed_window_radius", "mixed-window"},  {"mixed_min_jump", "mixed-min-jump"},
+      {"mixed_max_veil_angle_deg", "mixed-max-angle"}, {"crop_min", "crop-min"},
+      {"crop_max", "crop-max"},                 {"up", "up"},
+      {"floor_max_tilt_deg", "floor-max-tilt"}, {"floor_distance", "floor-distance"},
+      {"spur_min_connected", "spur-min-connected"}, {"spur_iterations", "spur-iterations"},
+      {"spur_depth", "spur-depth"},             {"delta_connected", "delta-connected"},
+      {"min_mesh_size", "min-mesh-size"},       {"k", "k"},
+      {"delta_orient", "delta-orient"}};
+  const auto it = flags.find (key);
+  return it == flags.end () ? key : "--" + it->second;
+}
+
+void
+finishPipelineOptions (const std::vector<std::string> &storage, DepthPipelineParams &params)
+{
+  params.crop_min = parseVector ("crop-min", storage.at (0));
+  params.crop_max = parseVector ("crop-max", storage.at (1));
+  params.up = parseVector ("up", storage.at (2));
+  // The library's ranges, the same for flags and model files.
+  params.validate (pipelineFlagName);
+  params.up.normalize ();
+}
+}  // namespace apps
+}  // namespace agex

@@ -1,0 +1,135 @@
+#pragma once
+
+#include <agex/common/point_types.h>
+
+#include <pcl/PointIndices.h>
+#include <pcl/pcl_base.h>
+#include <pcl/point_cloud.h>
+#include <pcl/point_types.h>
+
+#include <nlohmann/json_fwd.hpp>
+
+#include <Eigen/Core>
+
+#include <functional>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace agex
+{
+/** \brief Every setting of the depth pipeline, with the documented defaults
+  * (doc/pipeline.md). The same ranges hold for flags and model files: validate ()
+  * checks them all. */
+struct DepthPipelineParams
+{
+  // Denoising (agex::DepthMedianFilter on depth); window 0 or 1 disables it.
+  int median_window = 3;
+  float median_max_movement = 0.05f;
+  // Mixed pixels (agex::MixedPixelFilter).
+  bool remove_mixed_pixels = true;
+  int mixed_window_radius = 2;
+  float mixed_min_jump = 0.05f;
+  float mixed_max_veil_angle_deg = 15.f;
+  // Bounding box in the camera frame, metres (pcl::CropBox).
+  Eigen::Vector3f crop_min = Eigen::Vector3f (-0.75f, -1.5f, 1.3f);
+  Eigen::Vector3f crop_max = Eigen::Vector3f (0.75f, 1.5f, 2.6f);
+  // Floor (agex::FloorRemoval).
+  bool remove_floor = true;
+  Eigen::Vector3f up = Eigen::Vector3f (0.f, -1.f, 0.f);
+  float floor_max_tilt_deg = 25.f;
+  float floor_distance = 0.04f;
+  int floor_min_inliers = 200;
+  // Spurs and ragged edges (agex::SpurFilter).
+  int spur_min_connected = 6;
+  int spur_iterations = -1;  ///< negative: auto, spur_depth over the median point spacing
+  float spur_depth = 0.035f;
+  // Surface meshes (agex::SurfaceSegmentation) and AGEX (agex::AGEXKeypoint).
+  float delta_connected = 0.03f;
+  int min_mesh_size = -1;  ///< points; negative: 0.1% of the frame's pixels
+  int k = 5;               ///< AGEX points per mesh, centroid included
+  float delta_orient = 0.10f;
+  bool naive = false;  ///< reference AGEX: a full Dijkstra per point (not stored in models)
+
+  /** \brief Checks every setting against its documented range.
+    * \param name  how a setting is named in the message, given its key (e.g.
+    *              "--mixed-window" for a flag, "model.yml: pipeline.mixed_window_radius")
+    * \throws std::invalid_argument naming the first setting out of range and the range */
+  void validate (const std::function<std::string (const std::string &key)> &name) const;
+  /** validate () naming each setting by its key. */
+  void validate () const;
+
+  /** The settings as stored in a model file ("pipeline" object; naive is not stored). */
+  nlohmann::json toJson () const;
+  /** \brief Reads what toJson () wrote and validates it.
+    * \throws std::invalid_argument naming source and the key on a missing, mistyped or
+    *         out-of-range setting */
+  static DepthPipelineParams fromJson (const nlohmann::json &doc, const std::string &source);
+};
+
+/** What a pipeline run produced: everything a user may want to draw or reuse. */
+struct DepthPipelineResult
+{
+  pcl::PointCloud<pcl::PointXYZ>::Ptr filtered;  ///< organized, NaN where removed
+  std::vector<pcl::PointIndices> meshes;         ///< connected surface meshes of filtered
+  pcl::PointCloud<agex::InterestPoint> interest_points;
+  bool floor_found = false;
+  Eigen::Vector4f floor_plane = Eigen::Vector4f::Zero ();  ///< n.p + d = height above the floor
+  int mixed_pixels_removed = 0;
+  int spur_iterations = 0;  ///< erosion passes actually run
+  /** Stage name -> milliseconds, in order (crop, mixed_pixels, denoise, floor, spurs,
+    * segmentation, agex, then total). */
+  std::vector<std::pair<std::string, double>> ms;
+
+  /** The pixels of all meshes, in mesh order. */
+  std::vector<int> meshIndices () const;
+};
+
+/** \brief The depth stages composed as the detector runs them: frame -> crop box ->
+  * mixed-pixel removal -> median denoise -> floor removal -> spur removal -> surface
+  * meshes -> AGEX. Each stage is a PCL or agex class used as a PCL user would; this class
+  * wires them together and times them.
+  *
+  * setIndices limits the frame to those pixels (the rest is treated as invalid). Any
+  * organized input of an XYZ point type is taken; the stages run on its XYZ copy. Empty,
+  * unorganized or all-NaN frames give an empty result, never an exception.
+  */
+template <typename PointT>
+class DepthPipeline : public pcl::PCLBase<PointT>
+{
+public:
+  using Ptr = pcl::shared_ptr<DepthPipeline<PointT>>;
+  using ConstPtr = pcl::shared_ptr<const DepthPipeline<PointT>>;
+
+  DepthPipeline () = default;
+  explicit DepthPipeline (const DepthPipelineParams &params) : params_ (params) {}
+
+  /** \throws std::invalid_argument on a setting out of range (DepthPipelineParams::validate) */
+  void setParams (const DepthPipelineParams &params)
+  {
+    params.validate ();
+    params_ = params;
+  }
+  const DepthPipelineParams &getParams () const { return params_; }
+
+  /** Runs every stage on the input cloud; result is replaced. */
+  void compute (DepthPipelineResult &result);
+
+protected:
+  using pcl::PCLBase<PointT>::input_;
+  using pcl::PCLBase<PointT>::indices_;
+  using pcl::PCLBase<PointT>::use_indices_;
+
+private:
+  DepthPipelineParams params_;
+};
+
+/** The pipeline run once on cloud with params (DepthPipeline<pcl::PointXYZ> in one call).
+  * \throws std::invalid_argument on a setting out of range */
+DepthPipelineResult runDepthPipeline (const pcl::PointCloud<pcl::PointXYZ>::ConstPtr &cloud,
+                                      const DepthPipelineParams &params);
+}  // namespace agex
+
+#ifdef PCL_NO_PRECOMPILE
+#include <agex/detection/impl/depth_pipeline.hpp>
+#endif

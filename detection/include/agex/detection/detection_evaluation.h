@@ -1,0 +1,77 @@
+#pragma once
+// The paper's detection evaluation (average precision, precision-recall, confusion,
+// orientation error), by distance or by box overlap: library code, so that users can
+// score their own data from C++.
+
+#include <agex/common/pixel_box.h>
+#include <agex/detection/body_part_detection.h>
+#include <agex/io/dataset.h>
+
+#include <nlohmann/json.hpp>
+
+#include <array>
+#include <utility>
+#include <vector>
+
+namespace agex
+{
+/** The physical side (metres) of a body part's box for the overlap criterion: head 0.25,
+  * hand 0.15, foot 0.20 (doc/results.md). */
+float partBoxSide (BodyPart part);
+
+/** The square of partBoxSide (part) * scale metres at depth z, projected with focal length
+  * focal (pixels), centred on pixel (u, v) (the pixel's centre is u + 0.5, v + 0.5). */
+PixelBox partBox (BodyPart part, float u, float v, float z, float scale, float focal);
+
+/** \brief The paper's detection evaluation: a detection is correct when it names the class
+  * of a labelled tip that matches it and that no more confident detection took. Matching
+  * is either distance (the tip within radius of the detection, 3D; the nearest wins) or box
+  * overlap (the part's box around the tip and the detection's box, partBox, overlap with
+  * intersection over union above min_iou; the largest overlap wins). */
+class DetectionEvaluation
+{
+public:
+  /** The distance criterion. */
+  explicit DetectionEvaluation (float radius) : radius_ (radius) {}
+  /** The box-overlap criterion, boxes projected with focal length focal (pixels). */
+  static DetectionEvaluation boxOverlap (float min_iou, float focal);
+  void addFrame (const std::vector<BodyPartDetection> &detections, const std::vector<PartLabel> &labels);
+  /** Average precision of a class (area under the interpolated precision-recall curve). */
+  double averagePrecision (BodyPart part) const;
+  /** (recall, precision) points as the threshold falls. */
+  std::vector<std::pair<double, double>> precisionRecall (BodyPart part) const;
+  /** Rows: truth (head, hand, foot, background); columns: predicted (head, hand, foot,
+    * none), counting detections at or above the threshold and tips nothing found. */
+  std::array<std::array<int, 4>, 4> confusion (float threshold) const;
+  double orientationMedianDeg (BodyPart part) const;
+  int frames () const { return frames_; }
+  nlohmann::json report (float confusion_threshold) const;
+
+private:
+  /** How well d fits l under the criterion (larger is better); negative: no match. */
+  float matchQuality (const BodyPartDetection &d, const PartLabel &l) const;
+  /** The label (any class) that d fits best, or -1. */
+  int bestLabel (const BodyPartDetection &d, const std::vector<PartLabel> &labels) const;
+
+  struct Scored
+  {
+    float confidence;
+    bool correct;
+  };
+  float radius_;
+  float min_iou_ = 0.f;  ///< > 0: the box-overlap criterion
+  float focal_ = 0.f;
+  int frames_ = 0;
+  std::array<std::vector<Scored>, kBodyPartCount> scored_;
+  std::array<int, kBodyPartCount> positives_{};
+  // For the confusion matrix: every detection's (truth, predicted, confidence) and
+  // every tip's best detection confidence of its own class.
+  struct Pair
+  {
+    int truth, predicted;
+    float confidence;
+  };
+  std::vector<Pair> pairs_;
+  std::array<std::vector<double>, kBodyPartCount> orientation_errors_;
+};
+}  // namespace agex

@@ -1,0 +1,87 @@
+#pragma once
+// The detector's model file: the boosted patch classifier, its patch geometry (stored
+// once, in the classifier) and the pipeline and detector settings it was trained with, in
+// the classifier file's metadata (doc/classifier.md). This file owns that schema.
+
+#include <agex/classification/patch_classifier.h>
+#include <agex/detection/depth_pipeline.h>
+
+#include <nlohmann/json.hpp>
+
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace agex
+{
+/** The detector a model was trained for (its patches are cut differently). */
+enum class DetectorKind
+{
+  Agex,          ///< AGEX points, patches oriented along the point's orientation
+  SlidingWindow  ///< every window position, upright patches (agex::SlidingWindowDetector)
+};
+/** "agex" or "sliding_window", as model files name them. */
+const char *detectorKindName (DetectorKind kind);
+
+/** Window layout of a sliding-window model (agex::SlidingWindowDetector). */
+struct SlidingWindowParams
+{
+  int stride = 3;                  ///< pixels between window centres, [1, 64]
+  std::vector<float> scales{1.f};  ///< window extents over the trained extent: 1-16 of them, each in (0, 10]
+};
+
+/** Everything a model needs to be applied as it was trained, besides the classifier. */
+struct DetectorSettings
+{
+  DepthPipelineParams pipeline;
+  /** Detections of a class closer than this (metres) to a more confident one are dropped. */
+  float suppression_radius = 0.15f;
+  DetectorKind kind = DetectorKind::Agex;  ///< models without the field are AGEX models
+  SlidingWindowParams sliding_window;      ///< used by sliding-window models only
+
+  /** \throws std::invalid_argument naming the setting (name (key)) out of range */
+  void validate (const std::function<std::string (const std::string &key)> &name) const;
+  /** The settings as a model's metadata holds them. */
+  nlohmann::json toJson () const;
+  /** \throws std::invalid_argument naming source and the key of a missing, mistyped or
+    *         out-of-range setting */
+  static DetectorSettings fromJson (const nlohmann::json &doc, const std::string &source);
+};
+
+/** \brief A trained detector: classifier and settings, loaded and saved as one file. */
+class DetectorModel
+{
+public:
+  using Ptr = std::shared_ptr<DetectorModel>;
+  using ConstPtr = std::shared_ptr<const DetectorModel>;
+
+  DetectorModel () = default;
+  /** \throws std::invalid_argument if the classifier is missing or untrained, or a setting
+    *         or the patch geometry is out of range */
+  DetectorModel (std::shared_ptr<const PatchClassifier> classifier, const DetectorSettings &settings);
+
+  /** \brief Reads a model file.
+    * \throws agex::ModelError naming the file and the problem: a damaged classifier, or
+    *         missing, malformed or out-of-range settings (the setting named) */
+  static DetectorModel load (const std::string &path);
+  /** \brief Writes the model atomically; training (commands, counts, times) is kept in the
+    * metadata beside the settings. \throws std::runtime_error naming the path */
+  void save (const std::string &path, const nlohmann::json &training = nlohmann::json::object ()) const;
+
+  /** \throws std::invalid_argument naming path when the model is not of the kind expected */
+  void requireKind (DetectorKind expected, const std::string &path) const;
+
+  bool valid () const { return classifier_ != nullptr; }
+  const PatchClassifier &classifier () const { return *classifier_; }
+  const std::shared_ptr<const PatchClassifier> &classifierPtr () const { return classifier_; }
+  const DetectorSettings &settings () const { return settings_; }
+  const PatchGeometry &patchGeometry () const { return classifier_->patchGeometry (); }
+  /** The metadata's "training" object of a loaded model (empty for a new one). */
+  const nlohmann::json &training () const { return training_; }
+
+private:
+  std::shared_ptr<const PatchClassifier> classifier_;
+  DetectorSettings settings_;
+  nlohmann::json training_ = nlohmann::json::object ();
+};
+}  // namespace agex

@@ -1,0 +1,148 @@
+#pragma once
+
+#include <agex/classification/non_maximum_suppression.h>
+#include <agex/classification/sliding_window_detector.h>
+#include <agex/common/statistics.h>
+#include <agex/detection/body_part_detector.h>
+#include <agex/detection/training_samples.h>
+
+#include <algorithm>
+#include <chrono>
+
+template <typename PointT> typename agex::BodyPartDetector<PointT>::Ptr
+agex::BodyPartDetector<PointT>::fromModel (const std::string &path)
+{
+  Ptr detector (new BodyPartDetector<PointT>);
+  detector->setModel (std::make_shared<const DetectorModel> (DetectorModel::load (path)));
+  return detector;
+}
+
+template <typename PointT> void
+agex::BodyPartDetector<PointT>::setModel (const DetectorModel::ConstPtr &model)
+{
+  model_ = model;
+  if (model_)
+    settings_ = model_->settings ();
+}
+
+template <typename PointT> void
+agex::BodyPartDetector<PointT>::setSettings (const DetectorSettings &settings)
+{
+  if (model_ && settings.kind != model_->settings ().kind)
+    throw std::logic_error ("BodyPartDetector::setSettings: the detector kind must stay the model's");
+  settings.validate ([] (const std::string &key) { return key; });
+  settings_ = settings;
+}
+
+template <typename PointT> void
+agex::BodyPartDetector<PointT>::compute (std::vector<BodyPartDetection> &detections)
+{
+  detections.clear ();
+  intermediate_ = DepthPipelineResult ();
+  patches_classified_ = 0;
+  if (!model_ || !model_->valid ())
+  {
+    PCL_ERROR ("[agex::BodyPartDetector::compute] No model was given (setModel or fromModel).\n");
+    return;
+  }
+  DepthPipeline<PointT> pipeline (settings_.pipeline);
+  pipeline.setInputCloud (input_);
+  if (use_indices_)
+    pipeline.setIndices (indices_);
+  pipeline.compute (intermediate_);
+  const double pipeline_ms = intermediate_.ms.empty () ? 0.0 : intermediate_.ms.back ().second;
+  intermediate_.ms.pop_back ();  // the total, given again below with the classifier's stages
+
+  classify (detections, settings_.kind == DetectorKind::SlidingWindow);
+  double total = pipeline_ms;
+  for (auto it = intermediate_.ms.end () - 2; it != intermediate_.ms.end (); ++it)
+    total += it->second;
+  intermediate_.ms.emplace_back ("total", total);
+}
+
+template <typename PointT> void
+agex::BodyPartDetector<PointT>::classify (std::vector<BodyPartDetection> &detections, bool windows)
+{
+  using Clock = std::chrono::steady_clock;
+  const DepthPipelineResult &prepared = intermediate_;
+  const PatchClassifier &classifier = model_->classifier ();
+  if (windows)
+  {
+    // The windows' patches are cut inside agex::SlidingWindowDetector, with the classifier.
+    intermediate_.ms.emplace_back ("patches", 0.0);
+    const auto start = Clock::now ();
+    if (prepared.filtered && !prepared.meshes.empty ())
+    {
+      pcl::IndicesPtr surface (new pcl::Indices);
+      for (const int i : prepared.meshIndices ())
+        surface->push_back (i);
+      agex::SlidingWindowDetector<pcl::PointXYZ> detector;
+      detector.setInputCloud (prepared.filtered);
+      detector.setIndices (surface);
+      detector.setClassifier (model_->classifierPtr ());
+      detector.setStride (settings_.sliding_window.stride);
+      detector.setScales (settings_.sliding_window.scales);
+      detector.setSuppressionRadius (settings_.suppression_radius);
+      std::vector<agex::WindowDetection> found;
+      detector.detect (found);
+      patches_classified_ = detector.getWindowCount ();
+      for (const auto &w : found)
+      {
+        BodyPartDetection d;
+        d.part = static_cast<BodyPart> (w.cls);
+        d.confidence = w.confidence;
+        d.margin = w.margin;
+        d.position = w.position;
+        d.u = w.u;
+        d.v = w.v;
+        d.scale = w.scale;
+        detections.push_back (d);
+      }
+    }
+    intermediate_.ms.emplace_back ("classify", msSince (start));
+    return;
+  }
+
+  auto start = Clock::now ();
+  std::vector<agex::DepthPatch> patches;
+  computePatches (prepared, prepared.interest_points, model_->patchGeometry (), patches);
+  intermediate_.ms.emplace_back ("patches", msSince (start));
+  start = Clock::now ();
+  const int classes = classifier.classes ();
+  std::vector<float> margins (classes), confidences (classes);
+  std::vector<BodyPartDetection> candidates;
+  for (std::size_t i = 0; i < patches.size () && i < prepared.interest_points.size (); ++i)
+  {
+    classifier.classify (patches[i], margins.data (), confidences.data ());
+    const int best = static_cast<int> (std::max_element (confidences.begin (), confidences.end ()) - confidences.begin ());
+    const agex::InterestPoint &p = prepared.interest_points[i];
+    BodyPartDetection d;
+    d.part = static_cast<BodyPart> (best);
+    d.confidence = confidences[best];
+    d.margin = margins[best];
+    d.position = p.getVector3fMap ();
+    d.orientation = p.getOrientationVector3fMap ();
+    d.u = p.u;
+    d.v = p.v;
+    d.rank = p.rank;
+    d.mesh = p.mesh;
+    candidates.push_back (d);
+  }
+  patches_classified_ = candidates.size ();
+  // Several extrema often sit on one part (a hand's fingers, the two sides of a head):
+  // keep the most confident detection of a class within the suppression radius.
+  std::vector<Eigen::Vector3f> positions;
+  std::vector<int> parts;
+  std::vector<float> scores;
+  for (const auto &d : candidates)
+  {
+    positions.push_back (d.position);
+    parts.push_back (static_cast<int> (d.part));
+    scores.push_back (d.confidence);
+  }
+  for (const std::size_t i : agex::suppressNonMaxima (positions, parts, scores, settings_.suppression_radius))
+    detections.push_back (candidates[i]);
+  intermediate_.ms.emplace_back ("classify", msSince (start));
+}
+
+#define PCL_INSTANTIATE_BodyPartDetector(T) template class PCL_EXPORTS agex::BodyPartDetector<T>;

@@ -1,0 +1,37 @@
+#pragma once
+// Depth patches of a pipeline result, and the training examples agex_train mines from
+// labelled frames: library code, so that a model can be trained from any data in C++.
+
+#include <agex/classification/patch_classifier.h>
+#include <agex/detection/depth_pipeline.h>
+#include <agex/io/dataset.h>
+
+#include <random>
+#include <vector>
+
+namespace agex
+{
+/** Depth patches (agex::DepthPatchEstimation) of points, in order, cut from the pipeline's
+  * filtered frame with the given geometry; none when the frame is missing or unorganized. */
+void computePatches (const DepthPipelineResult &prepared, const pcl::PointCloud<agex::InterestPoint> &points,
+                     const PatchGeometry &geometry, std::vector<agex::DepthPatch> &patches);
+
+/** \brief AGEX training examples from one labelled frame, appended to patches and
+  * classes: every interest point (positive for class c when within radius of a visible
+  * tip of class c, the nearest such tip's class; else background, label -1) and
+  * random_negatives random mesh points with random in-plane orientations, farther than
+  * 1.5 radius from every tip (label -1). */
+void collectTrainingSamples (const DepthPipelineResult &prepared, const std::vector<PartLabel> &labels, float radius,
+                             int random_negatives, const PatchGeometry &geometry, std::mt19937_64 &rng,
+                             std::vector<agex::DepthPatch> &patches, std::vector<int> &classes);
+
+/** \brief Sliding-window training examples from one labelled frame, all upright: per
+  * visible tip, the mesh pixel nearest to it in 3D (within radius) and up to jitter more
+  * random mesh pixels within jitter_radius of the tip (positives of the tip's class; a
+  * window a stride apart from the tip must still fire), and random_negatives random mesh
+  * pixels farther than 1.5 radius from every tip (background, label -1). */
+void collectWindowTrainingSamples (const DepthPipelineResult &prepared, const std::vector<PartLabel> &labels,
+                                   float radius, int jitter, float jitter_radius, int random_negatives,
+                                   const PatchGeometry &geometry, std::mt19937_64 &rng,
+                                   std::vector<agex::DepthPatch> &patches, std::vector<int> &classes);
+}  // namespace agex

@@ -1,0 +1,191 @@
+#include <agex/detection/impl/depth_pipeline.hpp>
+
+#include <nlohmann/json.hpp>
+
+#include <pcl/impl/instantiate.hpp>
+#include <pcl/point_types.h>
+
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+namespace agex
+{
+namespace
+{
+using Namer = std::function<std::string (const std::string &)>;
+
+std::string
+formatNumber (double v)
+{
+  std::ostringstream out;
+  out << v;
+  return out.str ();
+}
+
+/** A number setting must be finite and lie in [lo, hi] (open ends where asked). */
+void
+checkRange (const Namer &name, const std::string &key, double value, double lo, double hi, bool lo_open = false,
+            bool hi_open = false)
+{
+  const bool ok = std::isfinite (value) && (lo_open ? value > lo : value >= lo) && (hi_open ? value < hi : value <= hi);
+  if (!ok)
+    throw std::invalid_argument (name (key) + " is " + formatNumber (value) + ", outside " + (lo_open ? "(" : "[") +
+                                 formatNumber (lo) + ", " + formatNumber (hi) + (hi_open ? ")" : "]"));
+}
+
+void
+checkVector (const Namer &name, const std::string &key, const Eigen::Vector3f &v, double limit)
+{
+  if (!v.allFinite () || v.cwiseAbs ().maxCoeff () > limit)
+    throw std::invalid_argument (name (key) + " must be three finite numbers within +-" + formatNumber (limit));
+}
+}  // namespace
+
+void
+DepthPipelineParams::validate (const Namer &name) const
+{
+  // Ranges wide enough for any sensor and scene, tight enough that no setting can make one
+  // frame take minutes or gigabytes.
+  checkRange (name, "median_window", median_window, 0, 31);
+  checkRange (name, "median_max_movement", median_max_movement, 0, 1);
+  checkRange (name, "mixed_window_radius", mixed_window_radius, 1, 31);
+  checkRange (name, "mixed_min_jump", mixed_min_jump, 0, 1, true);
+  checkRange (name, "mixed_max_veil_angle_deg", mixed_max_veil_angle_deg, 0, 90, true, true);
+  checkVector (name, "crop_min", crop_min, 1000);
+  checkVector (name, "crop_max", crop_max, 1000);
+  if ((crop_max - crop_min).minCoeff () <= 0.f)
+    throw std::invalid_argument (name ("crop_min") + " must be below " + name ("crop_max") + " on every axis");
+  checkVector (name, "up", up, 1e6);
+  if (!(up.norm () > 0.f))
+    throw std::invalid_argument (name ("up") + " must be a non-zero vector");
+  checkRange (name, "floor_max_tilt_deg", floor_max_tilt_deg, 0, 90, false, true);
+  checkRange (name, "floor_distance", floor_distance, 0, 0.5, true);
+  checkRange (name, "floor_min_inliers", floor_min_inliers, 3, 1e7);
+  checkRange (name, "spur_min_connected", spur_min_connected, 0, 8);
+  checkRange (name, "spur_iterations", spur_iterations, -1, 64);  // -1: auto
+  checkRange (name, "spur_depth", spur_depth, 0, 0.5, true);
+  checkRange (name, "delta_connected", delta_connected, 0, 0.3, true);
+  checkRange (name, "min_mesh_size", min_mesh_size, -1, 1e8);  // -1: auto
+  checkRange (name, "k", k, 1, 200);
+  checkRange (name, "delta_orient", delta_orient, 0, 1);
+}
+
+void
+DepthPipelineParams::validate () const
+{
+  validate ([] (const std::string &key) { return key; });
+}
+
+nlohmann::json
+DepthPipelineParams::toJson () const
+{
+  auto vec = [] (const Eigen::Vector3f &v) { return nlohmann::json::array ({v.x (), v.y (), v.z ()}); };
+  return {{"median_window", median_window},
+          {"median_max_movement", median_max_movement},
+          {"remove_mixed_pixels", remove_mixed_pixels},
+          {"mixed_window_radius", mixed_window_radius},
+          {"mixed_min_jump", mixed_min_jump},
+          {"mixed_max_veil_angle_deg", mixed_max_veil_angle_deg},
+          {"crop_min", vec (crop_min)},
+          {"crop_max", vec (crop_max)},
+          {"remove_floor", remove_floor},
+          {"up", vec (up)},
+          {"floor_max_tilt_deg", floor_max_tilt_deg},
+          {"floor_distance", floor_distance},
+          {"floor_min_inliers", floor_min_inliers},
+          {"spur_min_connected", spur_min_connected},
+          {"spur_iterations", spur_iterations},
+          {"spur_depth", spur_depth},
+          {"delta_connected", delta_connected},
+          {"min_mesh_size", min_mesh_size},
+          {"k", k},
+          {"delta_orient", delta_orient}};
+}
+
+DepthPipelineParams
+DepthPipelineParams::fromJson (const nlohmann::json &doc, const std::string &source)
+{
+  const Namer name = [&source] (const std::string &key) { return source + ": pipeline." + key; };
+  if (!doc.is_object ())
+    throw std::invalid_argument (source + ": pipeline settings must be an object");
+  DepthPipelineParams q;
+  // Numbers are read as double and range-checked before narrowing: 1e300 must not wrap.
+  auto number = [&] (const char *key, double lo, double hi) {
+    const auto it = doc.find (key);
+    if (it == doc.end () || !it->is_number ())
+      throw std::invalid_argument (name (key) + " is missing or not a number");
+    const double v = it->get<double> ();
+    checkRange (name, key, v, lo, hi);
+    return v;
+  };
+  auto integer = [&] (const char *key, double lo, double hi) {
+    const double v = number (key, lo, hi);
+    if (v != std::floor (v))
+      throw std::invalid_argument (name (key) + " must be a whole number");
+    return static_cast<int> (v);
+  };
+  auto boolean = [&] (const char *key) {
+    const auto it = doc.find (key);
+    if (it == doc.end () || !it->is_boolean ())
+      throw std::invalid_argument (name (key) + " is missing or not true/false");
+    return it->get<bool> ();
+  };
+  auto vector = [&] (const char *key) {
+    const auto it = doc.find (key);
+    if (it == doc.end () || !it->is_array () || it->size () != 3 ||
+        !std::all_of (it->begin (), it->end (), [] (const nlohmann::json &v) { return v.is_number (); }))
+      throw std::invalid_argument (name (key) + " is missing or not three numbers");
+    Eigen::Vector3d v ((*it)[0].get<double> (), (*it)[1].get<double> (), (*it)[2].get<double> ());
+    if (!v.allFinite () || v.cwiseAbs ().maxCoeff () > 1e6)
+      throw std::invalid_argument (name (key) + " must be three finite numbers within +-1e6");
+    return Eigen::Vector3f (v.cast<float> ());
+  };
+  // Wide bounds here only keep the narrowing safe; validate () applies the real ranges.
+  constexpr double kWide = 1e9;
+  q.median_window = integer ("median_window", -kWide, kWide);
+  q.median_max_movement = static_cast<float> (number ("median_max_movement", -kWide, kWide));
+  q.remove_mixed_pixels = boolean ("remove_mixed_pixels");
+  q.mixed_window_radius = integer ("mixed_window_radius", -kWide, kWide);
+  q.mixed_min_jump = static_cast<float> (number ("mixed_min_jump", -kWide, kWide));
+  q.mixed_max_veil_angle_deg = static_cast<float> (number ("mixed_max_veil_angle_deg", -kWide, kWide));
+  q.crop_min = vector ("crop_min");
+  q.crop_max = vector ("crop_max");
+  q.remove_floor = boolean ("remove_floor");
+  q.up = vector ("up");
+  q.floor_max_tilt_deg = static_cast<float> (number ("floor_max_tilt_deg", -kWide, kWide));
+  q.floor_distance = static_cast<float> (number ("floor_distance", -kWide, kWide));
+  q.floor_min_inliers = integer ("floor_min_inliers", -kWide, kWide);
+  q.spur_min_connected = integer ("spur_min_connected", -kWide, kWide);
+  q.spur_iterations = integer ("spur_iterations", -kWide, kWide);
+  q.spur_depth = static_cast<float> (number ("spur_depth", -kWide, kWide));
+  q.delta_connected = static_cast<float> (number ("delta_connected", -kWide, kWide));
+  q.min_mesh_size = integer ("min_mesh_size", -kWide, kWide);
+  q.k = integer ("k", -kWide, kWide);
+  q.delta_orient = static_cast<float> (number ("delta_orient", -kWide, kWide));
+  q.validate (name);
+  return q;
+}
+
+DepthPipelineResult
+runDepthPipeline (const pcl::PointCloud<pcl::PointXYZ>::ConstPtr &cloud, const DepthPipelineParams &params)
+{
+  DepthPipeline<pcl::PointXYZ> pipeline;
+  pipeline.setParams (params);
+  pipeline.setInputCloud (cloud);
+  DepthPipelineResult result;
+  pipeline.compute (result);
+  return result;
+}
+
+std::vector<int>
+DepthPipelineResult::meshIndices () const
+{
+  std::vector<int> surface;
+  for (const auto &mesh : meshes)
+    surface.insert (surface.end (), mesh.indices.begin (), mesh.indices.end ());
+  return surface;
+}
+}  // namespace agex
+
+PCL_INSTANTIATE (DepthPipeline, (pcl::PointXYZ)(pcl::PointXYZI)(pcl::PointXYZRGB)(pcl::PointXYZRGBA))

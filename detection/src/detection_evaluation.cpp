@@ -1,0 +1,216 @@
+#include <agex/detection/detection_evaluation.h>
+
+#include <agex/common/statistics.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace agex
+{
+float
+partBoxSide (BodyPart part)
+{
+  switch (part)
+  {
+  case BodyPart::Head:
+    return 0.25f;
+  case BodyPart::Hand:
+    return 0.15f;
+  default:
+    return 0.20f;
+  }
+}
+
+PixelBox
+partBox (BodyPart part, float u, float v, float z, float scale, float focal)
+{
+  const float half = 0.5f * partBoxSide (part) * scale * focal / z;
+  if (!(half > 0.f) || !std::isfinite (half))
+    return {};
+  return {u + 0.5f - half, v + 0.5f - half, u + 0.5f + half, v + 0.5f + half};
+}
+
+DetectionEvaluation
+DetectionEvaluation::boxOverlap (float min_iou, float focal)
+{
+  DetectionEvaluation e (0.f);
+  e.min_iou_ = min_iou;
+  e.focal_ = focal;
+  return e;
+}
+
+float
+DetectionEvaluation::matchQuality (const BodyPartDetection &d, const PartLabel &l) const
+{
+  if (!l.visible || !l.tip.allFinite ())
+    return -1.f;
+  if (min_iou_ > 0.f)
+  {
+    // Both boxes are the same physical size for the detected class: the detection's at its
+    // window scale and depth, the label's at scale 1 around the tip.
+    const float iou = intersectionOverUnion (
+        partBox (d.part, static_cast<float> (d.u), static_cast<float> (d.v), d.position.z (), d.scale, focal_),
+        partBox (d.part, l.tip_px.x (), l.tip_px.y (), l.tip.z (), 1.f, focal_));
+    return iou > min_iou_ ? iou : -1.f;
+  }
+  const float dist = (l.tip - d.position).norm ();
+  return dist <= radius_ ? radius_ - dist : -1.f;
+}
+
+int
+DetectionEvaluation::bestLabel (const BodyPartDetection &d, const std::vector<PartLabel> &labels) const
+{
+  int best = -1;
+  float best_quality = -1.f;
+  for (std::size_t i = 0; i < labels.size (); ++i)
+  {
+    const float q = matchQuality (d, labels[i]);
+    if (q >= 0.f && q > best_quality)
+    {
+      best_quality = q;
+      best = static_cast<int> (i);
+    }
+  }
+  return best;
+}
+
+void
+DetectionEvaluation::addFrame (const std::vector<BodyPartDetection> &detections, const std::vector<PartLabel> &labels)
+{
+  ++frames_;
+  std::vector<bool> taken (labels.size (), false);
+  for (const auto &l : labels)
+    if (l.visible && l.tip.allFinite ())
+      ++positives_[static_cast<int> (l.part)];
+  // Most confident first: a tip goes to the best detection that names its class.
+  std::vector<const BodyPartDetection *> order;
+  for (const auto &d : detections)
+    order.push_back (&d);
+  std::stable_sort (order.begin (), order.end (),
+                    [] (const BodyPartDetection *a, const BodyPartDetection *b) { return a->confidence > b->confidence; });
+  for (const BodyPartDetection *d : order)
+  {
+    int match = -1;
+    float best = -1.f;
+    for (std::size_t i = 0; i < labels.size (); ++i)
+    {
+      if (taken[i] || labels[i].part != d->part)
+        continue;
+      const float quality = matchQuality (*d, labels[i]);
+      if (quality >= 0.f && quality >= best)
+      {
+        best = quality;
+        match = static_cast<int> (i);
+      }
+    }
+    const int cls = static_cast<int> (d->part);
+    scored_[cls].push_back ({d->confidence, match >= 0});
+    if (match >= 0)
+    {
+      taken[match] = true;
+      const double error = angleBetweenDeg (labels[match].tip - labels[match].base, d->orientation);
+      if (labels[match].base.allFinite () && std::isfinite (error))
+        orientation_errors_[cls].push_back (error);
+    }
+    const int tip = bestLabel (*d, labels);
+    pairs_.push_back ({tip < 0 ? 3 : static_cast<int> (labels[tip].part), cls, d->confidence});
+  }
+  // Tips no detection of any class reached, with the confidence it would have needed.
+  for (std::size_t i = 0; i < labels.size (); ++i)
+  {
+    const auto &l = labels[i];
+    if (!l.visible || !l.tip.allFinite ())
+      continue;
+    float best = -1.f;
+    for (const auto &d : detections)
+      if (matchQuality (d, l) >= 0.f)
+        best = std::max (best, d.confidence);
+    pairs_.push_back ({static_cast<int> (l.part), -1, best});
+  }
+}
+
+std::vector<std::pair<double, double>>
+DetectionEvaluation::precisionRecall (BodyPart part) const
+{
+  auto scored = scored_[static_cast<int> (part)];
+  std::stable_sort (scored.begin (), scored.end (), [] (const Scored &a, const Scored &b) { return a.confidence > b.confidence; });
+  const int positives = positives_[static_cast<int> (part)];
+  std::vector<std::pair<double, double>> curve;
+  int tp = 0, fp = 0;
+  for (const auto &s : scored)
+  {
+    s.correct ? ++tp : ++fp;
+    curve.emplace_back (positives > 0 ? static_cast<double> (tp) / positives : 0.0, static_cast<double> (tp) / (tp + fp));
+  }
+  return curve;
+}
+
+double
+DetectionEvaluation::averagePrecision (BodyPart part) const
+{
+  const auto curve = precisionRecall (part);
+  if (positives_[static_cast<int> (part)] == 0)
+    return std::nan ("");
+  // All-points interpolation (PASCAL VOC 2010+): precision made monotone from the right.
+  double ap = 0.0, previous_recall = 0.0;
+  for (std::size_t i = 0; i < curve.size (); ++i)
+  {
+    double best_precision = 0.0;
+    for (std::size_t j = i; j < curve.size (); ++j)
+      best_precision = std::max (best_precision, curve[j].second);
+    ap += (curve[i].first - previous_recall) * best_precision;
+    previous_recall = curve[i].first;
+  }
+  return ap;
+}
+
+std::array<std::array<int, 4>, 4>
+DetectionEvaluation::confusion (float threshold) const
+{
+  std::array<std::array<int, 4>, 4> m{};
+  for (const auto &p : pairs_)
+  {
+    if (p.predicted >= 0 && p.confidence >= threshold)
+      ++m[p.truth][p.predicted];
+    else if (p.predicted < 0 && p.confidence < threshold)
+      ++m[p.truth][3];  // a tip with no detection at or above the threshold
+  }
+  return m;
+}
+
+double
+DetectionEvaluation::orientationMedianDeg (BodyPart part) const
+{
+  return median (orientation_errors_[static_cast<int> (part)]);
+}
+
+nlohmann::json
+DetectionEvaluation::report (float threshold) const
+{
+  auto number = [] (double v) { return std::isfinite (v) ? nlohmann::json (v) : nlohmann::json (nullptr); };
+  nlohmann::json doc;
+  doc["frames"] = frames_;
+  if (min_iou_ > 0.f)
+    doc["min_iou"] = min_iou_;
+  else
+    doc["radius_m"] = radius_;
+  const char *names[] = {"head", "hand", "foot", "background"};
+  for (int c = 0; c < kBodyPartCount; ++c)
+  {
+    const auto part = static_cast<BodyPart> (c);
+    doc["ap"][names[c]] = number (averagePrecision (part));
+    doc["orientation_median_deg"][names[c]] = number (orientationMedianDeg (part));
+    doc["labels"][names[c]] = positives_[c];
+  }
+  const auto m = confusion (threshold);
+  nlohmann::json cm;
+  for (int t = 0; t < 4; ++t)
+    for (int p = 0; p < 4; ++p)
+      cm[names[t]][p == 3 ? "none" : names[p]] = m[t][p];
+  const std::string key = "confusion_at_" + nlohmann::json (threshold).dump ();
+  doc[key] = cm;
+  doc["confusion_rows"] = "truth: the class of the labelled tip within the radius (background: none); "
+                          "columns: the detection's class, or none for tips without a detection at or above the threshold";
+  return doc;
+}
+}  // namespace agex

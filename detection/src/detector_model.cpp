@@ -1,0 +1,185 @@
+#include <agex/detection/detector_model.h>
+
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+namespace agex
+{
+namespace
+{
+std::string
+formatNumber (double v)
+{
+  std::ostringstream out;
+  out << v;
+  return out.str ();
+}
+
+void
+checkGeometry (const PatchGeometry &g, const std::string &source)
+{
+  if (g.size < 3 || g.size > DepthPatch::kMaxSize || !(g.extent > 0.f && g.extent <= 5.f) ||
+      !(g.clamp > 0.f && g.clamp <= 5.f))
+    throw std::invalid_argument (source + ": patch geometry size " + std::to_string (g.size) + ", extent " +
+                                 formatNumber (g.extent) + " m, clamp " + formatNumber (g.clamp) +
+                                 " m is outside size [3, 41], extent (0, 5], clamp (0, 5]");
+}
+}  // namespace
+
+const char *
+detectorKindName (DetectorKind kind)
+{
+  return kind == DetectorKind::SlidingWindow ? "sliding_window" : "agex";
+}
+
+void
+DetectorSettings::validate (const std::function<std::string (const std::string &key)> &name) const
+{
+  pipeline.validate ([&name] (const std::string &key) { return name ("pipeline." + key); });
+  if (!(suppression_radius >= 0.f && suppression_radius <= 2.f))
+    throw std::invalid_argument (name ("suppression_radius") + " is " + formatNumber (suppression_radius) +
+                                 ", outside [0, 2] metres");
+  if (kind == DetectorKind::SlidingWindow)
+  {
+    if (sliding_window.stride < 1 || sliding_window.stride > 64)
+      throw std::invalid_argument (name ("sliding_window.stride") + " is " + std::to_string (sliding_window.stride) +
+                                   ", outside [1, 64] pixels");
+    if (sliding_window.scales.empty () || sliding_window.scales.size () > 16)
+      throw std::invalid_argument (name ("sliding_window.scales") + " must hold 1 to 16 scales");
+    for (const float s : sliding_window.scales)
+      if (!(s > 0.f && s <= 10.f))
+        throw std::invalid_argument (name ("sliding_window.scales") + " holds " + formatNumber (s) +
+                                     ", outside (0, 10]");
+  }
+}
+
+nlohmann::json
+DetectorSettings::toJson () const
+{
+  nlohmann::json doc = {{"detector", detectorKindName (kind)},
+                        {"suppression_radius", suppression_radius},
+                        {"pipeline", pipeline.toJson ()}};
+  if (kind == DetectorKind::SlidingWindow)
+    doc["sliding_window"] = {{"stride", sliding_window.stride}, {"scales", sliding_window.scales}};
+  return doc;
+}
+
+DetectorSettings
+DetectorSettings::fromJson (const nlohmann::json &doc, const std::string &source)
+{
+  const auto name = [&source] (const std::string &key) { return source + ": " + key; };
+  if (!doc.is_object ())
+    throw std::invalid_argument (source + ": the model's settings are missing (not an agex detector model?)");
+  DetectorSettings s;
+  const auto kind = doc.find ("detector");
+  if (kind != doc.end ())
+  {
+    if (!kind->is_string ())
+      throw std::invalid_argument (name ("detector") + " must be a string");
+    if (*kind == detectorKindName (DetectorKind::SlidingWindow))
+      s.kind = DetectorKind::SlidingWindow;
+    else if (*kind != detectorKindName (DetectorKind::Agex))
+      throw std::invalid_argument (name ("detector") + ": unknown detector '" + kind->get<std::string> () +
+                                   "' (expected agex or sliding_window)");
+  }
+  // Models written before the schema moved here kept the radius beside the patch geometry.
+  const nlohmann::json *radius = nullptr;
+  if (doc.contains ("suppression_radius"))
+    radius = &doc["suppression_radius"];
+  else if (doc.contains ("patch") && doc["patch"].is_object () && doc["patch"].contains ("suppression_radius"))
+    radius = &doc["patch"]["suppression_radius"];
+  if (radius)
+  {
+    if (!radius->is_number () || !std::isfinite (radius->get<double> ()) || std::abs (radius->get<double> ()) > 1e6)
+      throw std::invalid_argument (name ("suppression_radius") + " must be a number");
+    s.suppression_radius = radius->get<float> ();
+  }
+  if (!doc.contains ("pipeline"))
+    throw std::invalid_argument (source + ": pipeline settings are missing");
+  s.pipeline = DepthPipelineParams::fromJson (doc["pipeline"], source);
+  if (doc.contains ("sliding_window"))
+  {
+    const auto &w = doc["sliding_window"];
+    if (!w.is_object () || !w.contains ("stride") || !w["stride"].is_number_integer () || !w.contains ("scales") ||
+        !w["scales"].is_array () || w["scales"].size () > 16)
+      throw std::invalid_argument (name ("sliding_window") + " must hold an integer stride and up to 16 scales");
+    const auto stride = w["stride"].get<long long> ();
+    s.sliding_window.stride = stride < 0 || stride > 1000 ? 0 : static_cast<int> (stride);
+    s.sliding_window.scales.clear ();
+    for (const auto &scale : w["scales"])
+    {
+      if (!scale.is_number ())
+        throw std::invalid_argument (name ("sliding_window.scales") + " must be numbers");
+      s.sliding_window.scales.push_back (scale.get<float> ());
+    }
+  }
+  s.validate (name);
+  return s;
+}
+
+DetectorModel::DetectorModel (std::shared_ptr<const PatchClassifier> classifier, const DetectorSettings &settings)
+  : classifier_ (std::move (classifier)), settings_ (settings)
+{
+  if (!classifier_ || !classifier_->trained ())
+    throw std::invalid_argument ("a detector model needs a trained classifier");
+  settings_.validate ([] (const std::string &key) { return key; });
+  checkGeometry (classifier_->patchGeometry (), "the classifier");
+}
+
+DetectorModel
+DetectorModel::load (const std::string &path)
+{
+  auto classifier = std::make_shared<PatchClassifier> (PatchClassifier::load (path));
+  const nlohmann::json &metadata = classifier->metadata ();
+  DetectorModel model;
+  try
+  {
+    model.settings_ = DetectorSettings::fromJson (metadata, path);
+    checkGeometry (classifier->patchGeometry (), path);
+  }
+  catch (const std::invalid_argument &e)
+  {
+    throw ModelError (e.what ());
+  }
+  // Older models kept a copy of the geometry in the metadata: it must agree with the one
+  // the classifier was trained with, or the file is not what it claims.
+  if (metadata.contains ("patch") && metadata["patch"].is_object ())
+  {
+    const auto &p = metadata["patch"];
+    const PatchGeometry &g = classifier->patchGeometry ();
+    const auto differs = [&p] (const char *key, double value) {
+      return p.contains (key) && (!p[key].is_number () || p[key].get<float> () != static_cast<float> (value));
+    };
+    if (differs ("size", g.size) || differs ("extent", g.extent) || differs ("clamp", g.clamp))
+      throw ModelError (path + ": the settings' patch geometry differs from the classifier's");
+  }
+  if (metadata.contains ("training") && metadata["training"].is_object ())
+    model.training_ = metadata["training"];
+  model.classifier_ = classifier;
+  return model;
+}
+
+void
+DetectorModel::save (const std::string &path, const nlohmann::json &training) const
+{
+  if (!classifier_)
+    throw std::logic_error ("DetectorModel::save: no classifier");
+  nlohmann::json metadata = settings_.toJson ();
+  metadata["training"] = training;
+  classifier_->save (path, metadata);
+}
+
+void
+DetectorModel::requireKind (DetectorKind expected, const std::string &path) const
+{
+  auto described = [] (DetectorKind kind) {
+    return std::string (kind == DetectorKind::Agex ? "an AGEX model" : "a sliding-window model");
+  };
+  if (settings_.kind != expected)
+    throw std::invalid_argument (path + " is " + described (settings_.kind) + ", but " + described (expected) +
+                                 " is needed here" +
+                                 (expected == DetectorKind::Agex ? " (train one with agex_train without --sliding-window)"
+                                                                 : " (train one with agex_train --sliding-window)"));
+}
+}  // namespace agex

@@ -1,0 +1,132 @@
+#pragma once
+// The agex dataset format (doc/dataset.md): a directory with
+//   dataset.json      name, sensor, size, intrinsics, depth scale, units, provenance,
+//                     and the frames in order with the sequence each belongs to
+//   frames/<id>.pcd   organized pcl::PointXYZ, metres, NaN = invalid
+//   labels.csv        one row per labelled part instance per frame
+// Readers validate everything and name the file (and line) of any error. Writers
+// build the dataset in a temporary directory beside the target and rename it into
+// place, so an interrupted run leaves no half dataset behind.
+
+#include <agex/common/body_part.h>
+#include <agex/io/frame_io.h>
+
+#include <pcl/point_cloud.h>
+#include <pcl/point_types.h>
+
+#include <Eigen/Core>
+
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace agex
+{
+/** One labelled part instance in one frame. */
+struct PartLabel
+{
+  std::string frame;  ///< frame id
+  BodyPart part = BodyPart::Head;
+  int instance = 0;
+  Eigen::Vector3f tip = Eigen::Vector3f::Zero ();   ///< metres, camera frame (NaN if unknown)
+  Eigen::Vector3f base = Eigen::Vector3f::Zero ();  ///< metres, camera frame (NaN if unknown)
+  Eigen::Vector2f tip_px = Eigen::Vector2f::Zero ();   ///< pixel (u, v) in the stored frame
+  Eigen::Vector2f base_px = Eigen::Vector2f::Zero ();  ///< pixel (u, v) in the stored frame
+  bool visible = true;
+  bool keyframe = false;
+};
+
+struct DatasetInfo
+{
+  std::string name;
+  std::string sensor;  ///< e.g. "kinect", "sr4000", "bonn-kinect"
+  int width = 0, height = 0;
+  CameraIntrinsics intrinsics;
+  double depth_scale = 0.0;   ///< metres per unit of the source depth (informative)
+  std::string units = "m";    ///< units of the stored clouds; always metres
+  std::string provenance;     ///< where the frames and labels came from, how converted
+};
+
+struct DatasetFrame
+{
+  std::string id;
+  std::string sequence;
+};
+
+/** A dataset problem: the message names the file (and line) and what is wrong. */
+class DatasetError : public std::runtime_error
+{
+public:
+  using std::runtime_error::runtime_error;
+};
+
+class Dataset
+{
+public:
+  /** \brief Reads and validates a dataset directory (not the frame clouds: see loadFrame).
+    * \throws DatasetError */
+  static Dataset read (const std::string &directory);
+
+  const std::string &directory () const { return directory_; }
+  const DatasetInfo &info () const { return info_; }
+  const std::vector<DatasetFrame> &frames () const { return frames_; }
+  const std::vector<PartLabel> &labels () const { return labels_; }
+
+  /** Labels of one frame (empty if it has none). */
+  std::vector<PartLabel> labelsOf (const std::string &frame_id) const;
+  /** True if any label of the frame is a keyframe label. */
+  bool isKeyframe (const std::string &frame_id) const;
+  std::string framePath (const std::string &frame_id) const;
+  /** \brief Loads a frame's organized cloud. \throws FrameError naming the file */
+  pcl::PointCloud<pcl::PointXYZ>::Ptr loadFrame (const std::string &frame_id) const;
+
+private:
+  std::string directory_;
+  DatasetInfo info_;
+  std::vector<DatasetFrame> frames_;
+  std::vector<PartLabel> labels_;
+  std::map<std::string, std::vector<std::size_t>> labels_by_frame_;
+};
+
+/** \brief Reads labels.csv. \throws DatasetError naming path:line */
+std::vector<PartLabel> readLabelsCsv (const std::string &path);
+/** Formats labels as labels.csv text (header included). */
+std::string formatLabelsCsv (const std::vector<PartLabel> &labels);
+
+/** \brief Writes a dataset atomically: frames and labels go to a temporary directory
+  * next to the target, which commit() renames into place. Without commit() (an
+  * exception, an interrupted run) the temporary directory is removed. */
+class DatasetWriter
+{
+public:
+  /** \throws DatasetError if directory exists and overwrite is false */
+  DatasetWriter (const std::string &directory, const DatasetInfo &info, bool overwrite = false);
+  ~DatasetWriter ();
+  DatasetWriter (const DatasetWriter &) = delete;
+  DatasetWriter &operator= (const DatasetWriter &) = delete;
+
+  /** Adds a frame (organized cloud, metres) and its labels; ids must be unique and
+    * made of letters, digits, '_', '-' and '.'. */
+  void addFrame (const std::string &id, const std::string &sequence, const pcl::PointCloud<pcl::PointXYZ> &cloud,
+                 const std::vector<PartLabel> &labels);
+  /** The same with colour (an RGB-D frame): readers take x, y, z; agex_annotate rgbd the colour. */
+  void addFrame (const std::string &id, const std::string &sequence, const pcl::PointCloud<pcl::PointXYZRGBA> &cloud,
+                 const std::vector<PartLabel> &labels);
+  /** Writes dataset.json and labels.csv and moves the dataset into place. */
+  void commit ();
+
+private:
+  std::string directory_, staging_;
+  DatasetInfo info_;
+  bool overwrite_ = false, committed_ = false;
+  std::vector<DatasetFrame> frames_;
+  std::vector<PartLabel> labels_;
+
+  /** Checks id and size; returns the frame's path in the staging directory. */
+  std::string framePath (const std::string &id, std::uint32_t width, std::uint32_t height) const;
+  void addLabels (const std::string &id, const std::string &sequence, const std::vector<PartLabel> &labels);
+};
+}  // namespace agex

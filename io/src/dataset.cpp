@@ -1,0 +1,449 @@
+#include <agex/io/dataset.h>
+
+#include <pcl/io/pcd_io.h>
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <cerrno>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <limits>
+#include <set>
+#include <sstream>
+
+#include <signal.h>
+#include <unistd.h>
+
+namespace fs = std::filesystem;
+
+namespace agex
+{
+namespace
+{
+constexpr const char *kFormat = "agex-dataset";
+constexpr int kVersion = 1;
+constexpr const char *kLabelsHeader =
+    "frame,part,instance,tip_x,tip_y,tip_z,base_x,base_y,base_z,tip_u,tip_v,base_u,base_v,visible,keyframe";
+
+std::vector<std::string>
+splitCsv (const std::string &line)
+{
+  std::vector<std::string> cells;
+  std::string cell;
+  std::stringstream in (line);
+  while (std::getline (in, cell, ','))
+    cells.push_back (cell);
+  if (!line.empty () && line.back () == ',')
+    cells.emplace_back ();
+  return cells;
+}
+
+bool
+parseFloat (const std::string &text, float &value)
+{
+  if (text == "nan" || text == "NaN")
+  {
+    value = std::numeric_limits<float>::quiet_NaN ();
+    return true;
+  }
+  const char *end = text.data () + text.size ();
+  const auto result = std::from_chars (text.data (), end, value);
+  return result.ec == std::errc () && result.ptr == end && std::isfinite (value);
+}
+
+bool
+parseInt (const std::string &text, int &value)
+{
+  const char *end = text.data () + text.size ();
+  const auto result = std::from_chars (text.data (), end, value);
+  return result.ec == std::errc () && result.ptr == end;
+}
+
+bool
+validId (const std::string &id)
+{
+  return !id.empty () && id.size () <= 128 && id != "." && id != ".." &&
+         std::all_of (id.begin (), id.end (), [] (unsigned char c) {
+           return std::isalnum (c) || c == '_' || c == '-' || c == '.';
+         });
+}
+
+std::string
+formatFloat (float v)
+{
+  if (!std::isfinite (v))
+    return "nan";
+  std::ostringstream out;
+  out << std::setprecision (7) << v;
+  return out.str ();
+}
+
+/** A writer killed (SIGKILL, SIGTERM, power loss) before commit () or its destructor
+  * leaves its staging directory <prefix><pid>-XXXXXX beside the target, and, if killed
+  * inside commit (), the previous dataset moved aside as <prefix><pid>-XXXXXX.old. The
+  * next writer of the same target removes the first and puts the second back, once
+  * that process is gone. */
+void
+recoverInterruptedWriters (const fs::path &target, const std::string &prefix)
+{
+  std::error_code ec;
+  for (const auto &entry : fs::directory_iterator (target.parent_path (), ec))
+  {
+    const std::string name = entry.path ().filename ().string ();
+    if (name.compare (0, prefix.size (), prefix) != 0)
+      continue;
+    long pid = 0;
+    const char *begin = name.data () + prefix.size (), *end = name.data () + name.size ();
+    const auto parsed = std::from_chars (begin, end, pid);
+    if (parsed.ec != std::errc () || parsed.ptr == end || *parsed.ptr != '-' || pid <= 0 || pid == ::getpid () ||
+        ::kill (static_cast<pid_t> (pid), 0) == 0 || errno != ESRCH)
+      continue;
+    std::error_code ignored;
+    const bool moved_aside = name.size () > 4 && name.compare (name.size () - 4, 4, ".old") == 0;
+    if (moved_aside && !fs::exists (target, ignored))
+      fs::rename (entry.path (), target, ignored);
+    else
+      fs::remove_all (entry.path (), ignored);
+  }
+}
+
+template <typename T> T
+field (const nlohmann::json &doc, const char *name, const std::string &path)
+{
+  if (!doc.contains (name))
+    throw DatasetError (path + ": missing field '" + name + "'");
+  try
+  {
+    return doc.at (name).get<T> ();
+  }
+  catch (const nlohmann::json::exception &)
+  {
+    throw DatasetError (path + ": field '" + name + "' has the wrong type");
+  }
+}
+}  // namespace
+
+std::vector<PartLabel>
+readLabelsCsv (const std::string &path)
+{
+  std::ifstream in (path);
+  if (!in)
+    throw DatasetError (path + ": cannot open labels file");
+  std::string line;
+  if (!std::getline (in, line))
+    throw DatasetError (path + ":1: empty file, expected the header '" + std::string (kLabelsHeader) + "'");
+  if (!line.empty () && line.back () == '\r')
+    line.pop_back ();
+  if (line != kLabelsHeader)
+    throw DatasetError (path + ":1: unexpected header, expected '" + std::string (kLabelsHeader) + "'");
+
+  std::vector<PartLabel> labels;
+  std::set<std::tuple<std::string, int, int>> seen;
+  for (int number = 2; std::getline (in, line); ++number)
+  {
+    if (!line.empty () && line.back () == '\r')
+      line.pop_back ();
+    if (line.empty ())
+      continue;
+    const std::string where = path + ":" + std::to_string (number) + ": ";
+    const std::vector<std::string> cells = splitCsv (line);
+    if (cells.size () != 15)
+      throw DatasetError (where + "expected 15 comma-separated fields, found " + std::to_string (cells.size ()));
+    PartLabel label;
+    label.frame = cells[0];
+    if (!validId (label.frame))
+      throw DatasetError (where + "bad frame id '" + cells[0] + "'");
+    if (!parseBodyPart (cells[1], label.part))
+      throw DatasetError (where + "unknown part '" + cells[1] + "' (expected head, hand or foot)");
+    if (!parseInt (cells[2], label.instance) || label.instance < 0)
+      throw DatasetError (where + "instance must be a non-negative integer, got '" + cells[2] + "'");
+    float values[10];
+    static const char *names[] = {"tip_x", "tip_y", "tip_z", "base_x", "base_y", "base_z",
+                                  "tip_u", "tip_v", "base_u", "base_v"};
+    for (int i = 0; i < 10; ++i)
+      if (!parseFloat (cells[3 + i], values[i]) || (i >= 6 && !std::isfinite (values[i])))
+        throw DatasetError (where + names[i] + " is not a number: '" + cells[3 + i] + "'");
+    label.tip = Eigen::Vector3f (values[0], values[1], values[2]);
+    label.base = Eigen::Vector3f (values[3], values[4], values[5]);
+    label.tip_px = Eigen::Vector2f (values[6], values[7]);
+    label.base_px = Eigen::Vector2f (values[8], values[9]);
+    for (int i : {13, 14})
+      if (cells[i] != "0" && cells[i] != "1")
+        throw DatasetError (where + (i == 13 ? "visible" : "keyframe") + " must be 0 or 1, got '" + cells[i] + "'");
+    label.visible = cells[13] == "1";
+    label.keyframe = cells[14] == "1";
+    if (!seen.emplace (label.frame, static_cast<int> (label.part), label.instance).second)
+      throw DatasetError (where + "duplicate label for frame " + label.frame + ", " + cells[1] + " " + cells[2]);
+    labels.push_back (label);
+  }
+  return labels;
+}
+
+std::string
+formatLabelsCsv (const std::vector<PartLabel> &labels)
+{
+  std::ostringstream out;
+  out << kLabelsHeader << "\n";
+  for (const auto &l : labels)
+  {
+    out << l.frame << "," << bodyPartName (l.part) << "," << l.instance;
+    for (int i = 0; i < 3; ++i)
+      out << "," << formatFloat (l.tip[i]);
+    for (int i = 0; i < 3; ++i)
+      out << "," << formatFloat (l.base[i]);
+    out << "," << formatFloat (l.tip_px[0]) << "," << formatFloat (l.tip_px[1]) << "," << formatFloat (l.base_px[0])
+        << "," << formatFloat (l.base_px[1]) << "," << (l.visible ? 1 : 0) << "," << (l.keyframe ? 1 : 0) << "\n";
+  }
+  return out.str ();
+}
+
+Dataset
+Dataset::read (const std::string &directory)
+{
+  Dataset ds;
+  ds.directory_ = directory;
+  std::error_code ec;
+  if (!fs::is_directory (directory, ec))
+    throw DatasetError (directory + ": not a dataset directory (it does not exist or is not a directory)");
+  const std::string json_path = (fs::path (directory) / "dataset.json").string ();
+  std::ifstream in (json_path);
+  if (!in)
+    throw DatasetError (json_path + ": missing; every dataset directory has a dataset.json");
+  nlohmann::json doc;
+  try
+  {
+    in >> doc;
+  }
+  catch (const nlohmann::json::exception &e)
+  {
+    throw DatasetError (json_path + ": not valid JSON (" + e.what () + ")");
+  }
+  if (!doc.is_object ())
+    throw DatasetError (json_path + ": expected a JSON object");
+  if (field<std::string> (doc, "format", json_path) != kFormat)
+    throw DatasetError (json_path + ": 'format' is not \"" + kFormat + "\"");
+  const int version = field<int> (doc, "version", json_path);
+  if (version != kVersion)
+    throw DatasetError (json_path + ": dataset format version " + std::to_string (version) +
+                        " is not supported (this build reads version " + std::to_string (kVersion) + ")");
+  DatasetInfo &info = ds.info_;
+  info.name = field<std::string> (doc, "name", json_path);
+  info.sensor = field<std::string> (doc, "sensor", json_path);
+  info.width = field<int> (doc, "width", json_path);
+  info.height = field<int> (doc, "height", json_path);
+  if (info.width <= 0 || info.height <= 0 || info.width > 100000 || info.height > 100000)
+    throw DatasetError (json_path + ": width and height must be positive");
+  const auto intr = field<nlohmann::json> (doc, "intrinsics", json_path);
+  info.intrinsics.fx = field<double> (intr, "fx", json_path);
+  info.intrinsics.fy = field<double> (intr, "fy", json_path);
+  info.intrinsics.cx = field<double> (intr, "cx", json_path);
+  info.intrinsics.cy = field<double> (intr, "cy", json_path);
+  if (!(info.intrinsics.fx > 0) || !(info.intrinsics.fy > 0))
+    throw DatasetError (json_path + ": intrinsics fx and fy must be positive");
+  info.depth_scale = field<double> (doc, "depth_scale", json_path);
+  info.units = field<std::string> (doc, "units", json_path);
+  if (info.units != "m")
+    throw DatasetError (json_path + ": units must be \"m\" (clouds are stored in metres)");
+  info.provenance = doc.value ("provenance", std::string ());
+
+  const auto frames = field<nlohmann::json> (doc, "frames", json_path);
+  if (!frames.is_array ())
+    throw DatasetError (json_path + ": 'frames' must be an array");
+  std::set<std::string> ids;
+  for (const auto &f : frames)
+  {
+    if (!f.is_object ())
+      throw DatasetError (json_path + ": each entry of 'frames' must be an object with id and sequence");
+    DatasetFrame frame{field<std::string> (f, "id", json_path), field<std::string> (f, "sequence", json_path)};
+    if (!validId (frame.id))
+      throw DatasetError (json_path + ": bad frame id '" + frame.id + "'");
+    if (!ids.insert (frame.id).second)
+      throw DatasetError (json_path + ": frame id '" + frame.id + "' listed twice");
+    if (!fs::is_regular_file (ds.framePath (frame.id), ec))
+      throw DatasetError (ds.framePath (frame.id) + ": listed in dataset.json but missing");
+    ds.frames_.push_back (frame);
+  }
+
+  const std::string labels_path = (fs::path (directory) / "labels.csv").string ();
+  ds.labels_ = readLabelsCsv (labels_path);
+  for (std::size_t i = 0; i < ds.labels_.size (); ++i)
+  {
+    if (!ids.count (ds.labels_[i].frame))
+      throw DatasetError (labels_path + ": labels frame '" + ds.labels_[i].frame + "', which dataset.json does not list");
+    ds.labels_by_frame_[ds.labels_[i].frame].push_back (i);
+  }
+  return ds;
+}
+
+std::vector<PartLabel>
+Dataset::labelsOf (const std::string &frame_id) const
+{
+  std::vector<PartLabel> result;
+  const auto it = labels_by_frame_.find (frame_id);
+  if (it != labels_by_frame_.end ())
+    for (const auto i : it->second)
+      result.push_back (labels_[i]);
+  return result;
+}
+
+bool
+Dataset::isKeyframe (const std::string &frame_id) const
+{
+  for (const auto &l : labelsOf (frame_id))
+    if (l.keyframe)
+      return true;
+  return false;
+}
+
+std::string
+Dataset::framePath (const std::string &frame_id) const
+{
+  return (fs::path (directory_) / "frames" / (frame_id + ".pcd")).string ();
+}
+
+pcl::PointCloud<pcl::PointXYZ>::Ptr
+Dataset::loadFrame (const std::string &frame_id) const
+{
+  Frame frame = agex::loadFrame (framePath (frame_id));
+  if (static_cast<int> (frame.cloud->width) != info_.width || static_cast<int> (frame.cloud->height) != info_.height)
+    throw FrameError (framePath (frame_id) + ": is " + std::to_string (frame.cloud->width) + "x" +
+                      std::to_string (frame.cloud->height) + ", the dataset says " + std::to_string (info_.width) +
+                      "x" + std::to_string (info_.height));
+  return frame.cloud;
+}
+
+DatasetWriter::DatasetWriter (const std::string &directory, const DatasetInfo &info, bool overwrite)
+  : directory_ (directory), info_ (info), overwrite_ (overwrite)
+{
+  std::error_code ec;
+  if (fs::exists (directory, ec) && !overwrite)
+    throw DatasetError (directory + ": already exists; pass --force to replace it");
+  const fs::path target = fs::absolute (directory);
+  fs::create_directories (target.parent_path (), ec);
+  const std::string prefix = "." + target.filename ().string () + ".partial-";
+  recoverInterruptedWriters (target, prefix);
+  // The writer's process id is in the name, so that a later writer can tell an
+  // abandoned staging directory (its process was killed) from a live one.
+  std::string tmpl = (target.parent_path () / (prefix + std::to_string (::getpid ()) + "-XXXXXX")).string ();
+  if (!::mkdtemp (tmpl.data ()))
+    throw DatasetError (directory + ": cannot create a staging directory beside it");
+  staging_ = tmpl;
+  fs::create_directories (fs::path (staging_) / "frames", ec);
+  if (ec)
+    throw DatasetError (staging_ + ": cannot create frames/: " + ec.message ());
+}
+
+DatasetWriter::~DatasetWriter ()
+{
+  if (!committed_ && !staging_.empty ())
+  {
+    std::error_code ec;
+    fs::remove_all (staging_, ec);
+  }
+}
+
+namespace
+{
+template <typename PointT>
+void
+writeFrameFile (const std::string &path, const pcl::PointCloud<PointT> &cloud)
+{
+  if (pcl::io::savePCDFileBinaryCompressed (path, cloud) != 0)
+    throw DatasetError (path + ": cannot write frame");
+}
+}  // namespace
+
+std::string
+DatasetWriter::framePath (const std::string &id, std::uint32_t width, std::uint32_t height) const
+{
+  if (!validId (id))
+    throw DatasetError ("bad frame id '" + id + "' (letters, digits, '_', '-', '.')");
+  if (std::any_of (frames_.begin (), frames_.end (), [&] (const DatasetFrame &f) { return f.id == id; }))
+    throw DatasetError ("frame id '" + id + "' added twice");
+  if (static_cast<int> (width) != info_.width || static_cast<int> (height) != info_.height)
+    throw DatasetError ("frame '" + id + "' is " + std::to_string (width) + "x" + std::to_string (height) +
+                        ", the dataset is " + std::to_string (info_.width) + "x" + std::to_string (info_.height));
+  return (fs::path (staging_) / "frames" / (id + ".pcd")).string ();
+}
+
+void
+DatasetWriter::addLabels (const std::string &id, const std::string &sequence, const std::vector<PartLabel> &labels)
+{
+  frames_.push_back ({id, sequence});
+  for (PartLabel label : labels)
+  {
+    label.frame = id;
+    labels_.push_back (label);
+  }
+}
+
+void
+DatasetWriter::addFrame (const std::string &id, const std::string &sequence,
+                         const pcl::PointCloud<pcl::PointXYZ> &cloud, const std::vector<PartLabel> &labels)
+{
+  writeFrameFile (framePath (id, cloud.width, cloud.height), cloud);
+  addLabels (id, sequence, labels);
+}
+
+void
+DatasetWriter::addFrame (const std::string &id, const std::string &sequence,
+                         const pcl::PointCloud<pcl::PointXYZRGBA> &cloud, const std::vector<PartLabel> &labels)
+{
+  writeFrameFile (framePath (id, cloud.width, cloud.height), cloud);
+  addLabels (id, sequence, labels);
+}
+
+void
+DatasetWriter::commit ()
+{
+  nlohmann::json doc;
+  doc["format"] = kFormat;
+  doc["version"] = kVersion;
+  doc["name"] = info_.name;
+  doc["sensor"] = info_.sensor;
+  doc["width"] = info_.width;
+  doc["height"] = info_.height;
+  doc["intrinsics"] = {{"fx", info_.intrinsics.fx}, {"fy", info_.intrinsics.fy},
+                       {"cx", info_.intrinsics.cx}, {"cy", info_.intrinsics.cy}};
+  doc["depth_scale"] = info_.depth_scale;
+  doc["units"] = "m";
+  doc["provenance"] = info_.provenance;
+  doc["frames"] = nlohmann::json::array ();
+  for (const auto &f : frames_)
+    doc["frames"].push_back ({{"id", f.id}, {"sequence", f.sequence}});
+  {
+    std::ofstream json (fs::path (staging_) / "dataset.json");
+    json << doc.dump (2) << "\n";
+    std::ofstream csv (fs::path (staging_) / "labels.csv");
+    csv << formatLabelsCsv (labels_);
+    if (!json || !csv)
+      throw DatasetError (staging_ + ": cannot write dataset.json or labels.csv");
+  }
+  std::error_code ec;
+  std::string old;
+  if (fs::exists (directory_, ec))
+  {
+    if (!overwrite_)
+      throw DatasetError (directory_ + ": appeared while converting; not replaced");
+    old = staging_ + ".old";
+    fs::rename (directory_, old, ec);
+    if (ec)
+      throw DatasetError (directory_ + ": cannot move the old dataset aside: " + ec.message ());
+  }
+  fs::rename (staging_, directory_, ec);
+  if (ec)
+  {
+    if (!old.empty ())
+      fs::rename (old, directory_);
+    throw DatasetError (directory_ + ": cannot move the new dataset into place: " + ec.message ());
+  }
+  committed_ = true;
+  if (!old.empty ())
+    fs::remove_all (old, ec);
+}
+}  // namespace agex

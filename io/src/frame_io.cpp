@@ -1,0 +1,300 @@
+#include <agex/io/frame_io.h>
+#include <agex/io/pcd_reader.h>
+
+#include <pcl/PCLPointCloud2.h>
+#include <pcl/conversions.h>
+
+#include <opencv2/imgcodecs.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+
+namespace fs = std::filesystem;
+
+namespace agex
+{
+namespace
+{
+std::string
+lowerExtension (const std::string &path)
+{
+  std::string ext = fs::path (path).extension ().string ();
+  std::transform (ext.begin (), ext.end (), ext.begin (), [] (unsigned char c) { return std::tolower (c); });
+  return ext;
+}
+
+[[noreturn]] void
+fail (const std::string &path, const std::string &problem)
+{
+  throw FrameError (path + ": " + problem);
+}
+
+/** Refuses a PNG too large to decode from its header, before the decoder allocates. */
+void
+checkPngSize (const std::string &path)
+{
+  unsigned char head[24] = {};
+  std::ifstream in (path, std::ios::binary);
+  if (!in.read (reinterpret_cast<char *> (head), sizeof (head)))
+    return;  // too short to be a PNG: the decoder says so
+  std::uint64_t width = 0, height = 0;
+  if (pngHeaderSize (head, sizeof (head), width, height))
+    checkFrameSize (path, width, height);
+}
+
+/** agex stages read x, y, z as single floats from any organized cloud. */
+void
+checkXyzFields (const std::string &path, const pcl::PCLPointCloud2 &cloud)
+{
+  for (const char *name : {"x", "y", "z"})
+  {
+    const auto field = std::find_if (cloud.fields.begin (), cloud.fields.end (),
+                                     [&] (const pcl::PCLPointField &f) { return f.name == name; });
+    if (field == cloud.fields.end ())
+      fail (path, std::string ("PCD has no '") + name + "' field; agex needs x, y, z");
+    if (field->datatype != pcl::PCLPointField::FLOAT32 || field->count != 1)
+      fail (path, std::string ("PCD field '") + name + "' is not a single 4-byte float (TYPE F, SIZE 4, COUNT 1)");
+  }
+}
+
+Frame
+loadPCD (const std::string &path)
+{
+  const pcl::PCLPointCloud2 blob = readPcd (path);
+  checkXyzFields (path, blob);
+  if (blob.height <= 1)
+    fail (path, "PCD cloud is not organized (height " + std::to_string (blob.height) +
+                    "); agex stages need an organized depth frame");
+  if (blob.width < 1)
+    fail (path, "PCD cloud has no points (width 0)");
+
+  Frame frame;
+  frame.path = path;
+  frame.cloud.reset (new pcl::PointCloud<pcl::PointXYZ>);
+  pcl::fromPCLPointCloud2 (blob, *frame.cloud);
+  // PCL marks some invalid points as (0,0,0); agex uses NaN for invalid everywhere.
+  for (auto &p : frame.cloud->points)
+    if (!std::isfinite (p.x) || !std::isfinite (p.y) || !std::isfinite (p.z) || p.z <= 0.f)
+      p.x = p.y = p.z = std::numeric_limits<float>::quiet_NaN ();
+  frame.cloud->is_dense = false;
+  return frame;
+}
+
+cv::Mat
+readRawU16 (const std::string &path, int width, int height)
+{
+  if (width <= 0 || height <= 0)
+    fail (path, "a .u16 frame needs a positive --width and --height");
+  checkFrameSize (path, static_cast<std::uint64_t> (width), static_cast<std::uint64_t> (height));
+  std::ifstream in (path, std::ios::binary | std::ios::ate);
+  if (!in)
+    fail (path, "cannot open file");
+  const std::streamoff size = in.tellg ();
+  const std::streamoff expected = static_cast<std::streamoff> (width) * height * 2;
+  if (size != expected)
+    fail (path, "has " + std::to_string (size) + " bytes, expected " + std::to_string (expected) +
+                    " for a " + std::to_string (width) + "x" + std::to_string (height) +
+                    " uint16 frame (check --width/--height)");
+  cv::Mat depth (height, width, CV_16UC1);
+  in.seekg (0);
+  // Raw frames are little-endian, as is every platform agex targets.
+  static_assert (sizeof (std::uint16_t) == 2, "uint16 must be 2 bytes");
+  if (!in.read (reinterpret_cast<char *> (depth.data), expected))
+    fail (path, "read error");
+  return depth;
+}
+}  // namespace
+
+bool
+pngHeaderSize (const unsigned char *head, std::size_t length, std::uint64_t &width, std::uint64_t &height)
+{
+  static const unsigned char signature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+  if (length < 24 || !std::equal (signature, signature + 8, head) || !std::equal (head + 12, head + 16, "IHDR"))
+    return false;
+  auto big_endian = [] (const unsigned char *b) {
+    return (std::uint64_t (b[0]) << 24) | (std::uint64_t (b[1]) << 16) | (std::uint64_t (b[2]) << 8) | b[3];
+  };
+  width = big_endian (head + 16);
+  height = big_endian (head + 20);
+  return true;
+}
+
+void
+checkFrameSize (const std::string &path, std::uint64_t width, std::uint64_t height)
+{
+  if (width > kMaxFramePixels || height > kMaxFramePixels || width * height > kMaxFramePixels)
+    fail (path, "claims a " + std::to_string (width) + "x" + std::to_string (height) +
+                    " frame, more than the " + std::to_string (kMaxFramePixels) + " pixels agex reads");
+}
+
+double
+defaultDepthScale (int cv_depth)
+{
+  return cv_depth == CV_8U ? 0.016 : 0.001;
+}
+
+void
+depthImageToCloud (const cv::Mat &depth, const CameraIntrinsics &intrinsics, double depth_scale,
+                   pcl::PointCloud<pcl::PointXYZ> &cloud)
+{
+  if (depth.empty () || depth.channels () != 1 || (depth.depth () != CV_8U && depth.depth () != CV_16U))
+    throw FrameError ("depth image must be a non-empty single-channel 8 or 16-bit image");
+  if (!(depth_scale > 0.0) || !std::isfinite (depth_scale))
+    throw FrameError ("depth scale must be a positive number of metres per unit");
+  if (!(intrinsics.fx > 0.0) || !(intrinsics.fy > 0.0))
+    throw FrameError ("focal lengths fx, fy must be positive");
+
+  cloud.width = static_cast<std::uint32_t> (depth.cols);
+  cloud.height = static_cast<std::uint32_t> (depth.rows);
+  cloud.is_dense = false;
+  cloud.resize (cloud.width * cloud.height);
+  const float nan = std::numeric_limits<float>::quiet_NaN ();
+  const double inv_fx = 1.0 / intrinsics.fx, inv_fy = 1.0 / intrinsics.fy;
+  for (int v = 0; v < depth.rows; ++v)
+    for (int u = 0; u < depth.cols; ++u)
+    {
+      const unsigned raw = depth.depth () == CV_8U ? depth.at<std::uint8_t> (v, u) : depth.at<std::uint16_t> (v, u);
+      pcl::PointXYZ &p = cloud (u, v);
+      if (raw == 0)
+      {
+        p.x = p.y = p.z = nan;
+        continue;
+      }
+      const double z = raw * depth_scale;
+      p.x = static_cast<float> ((u - intrinsics.cx) * z * inv_fx);
+      p.y = static_cast<float> ((v - intrinsics.cy) * z * inv_fy);
+      p.z = static_cast<float> (z);
+    }
+}
+
+Frame
+loadFrame (const std::string &path, const FrameOptions &options)
+{
+  std::error_code ec;
+  if (!fs::exists (path, ec))
+    fail (path, "no such file");
+  if (fs::is_directory (path, ec))
+    fail (path, "is a directory, expected a frame file");
+
+  const std::string ext = lowerExtension (path);
+  if (ext == ".pcd")
+    return loadPCD (path);
+
+  cv::Mat depth;
+  if (ext == ".png")
+  {
+    checkPngSize (path);
+    depth = cv::imread (path, cv::IMREAD_UNCHANGED);
+    if (depth.empty ())
+      fail (path, "cannot decode PNG (truncated or not a PNG)");
+    if (depth.channels () != 1)
+      fail (path, "is a " + std::to_string (depth.channels ()) +
+                      "-channel image; a depth frame must be single-channel");
+    if (depth.depth () != CV_8U && depth.depth () != CV_16U)
+      fail (path, "depth PNG must be 8 or 16-bit");
+  }
+  else if (ext == ".u16")
+    depth = readRawU16 (path, options.width, options.height);
+  else
+    fail (path, "unknown frame format '" + ext + "' (expected .pcd, .png or .u16)");
+  // Like an organized PCD: pixels need neighbours above or below for any stage to work.
+  if (depth.rows < 2 || depth.cols < 2)
+    fail (path, "a " + std::to_string (depth.cols) + "x" + std::to_string (depth.rows) +
+                    " image; a depth frame needs at least 2 rows and 2 columns");
+
+  Frame frame;
+  frame.path = path;
+  frame.from_depth_image = true;
+  frame.intrinsics = options.intrinsics;
+  frame.depth_scale = options.depth_scale > 0.0 ? options.depth_scale : defaultDepthScale (depth.depth ());
+  frame.cloud.reset (new pcl::PointCloud<pcl::PointXYZ>);
+  try
+  {
+    depthImageToCloud (depth, frame.intrinsics, frame.depth_scale, *frame.cloud);
+  }
+  catch (const FrameError &e)
+  {
+    fail (path, e.what ());
+  }
+  return frame;
+}
+
+int
+FrameView::outputWidth () const
+{
+  return static_cast<int> (std::floor (width * scale + 1e-9));
+}
+
+int
+FrameView::outputHeight () const
+{
+  return static_cast<int> (std::floor (height * scale + 1e-9));
+}
+
+cv::Point
+FrameView::sourcePixel (int u, int v) const
+{
+  const int su = x + std::min (width - 1, static_cast<int> (std::floor ((u + 0.5) / scale)));
+  const int sv = y + std::min (height - 1, static_cast<int> (std::floor ((v + 0.5) / scale)));
+  return {su, sv};
+}
+
+cv::Point2f
+FrameView::toView (const cv::Point2f &source) const
+{
+  return {static_cast<float> ((source.x - x + 0.5) * scale - 0.5),
+          static_cast<float> ((source.y - y + 0.5) * scale - 0.5)};
+}
+
+CameraIntrinsics
+FrameView::intrinsics (const CameraIntrinsics &source) const
+{
+  CameraIntrinsics k = source;
+  k.fx *= scale;
+  k.fy *= scale;
+  k.cx = scale * (source.cx - x + 0.5) - 0.5;  // as toView
+  k.cy = scale * (source.cy - y + 0.5) - 0.5;
+  return k;
+}
+
+FrameView
+bonnPortraitView ()
+{
+  FrameView view;
+  view.x = 140;
+  view.y = 20;
+  view.width = 360;
+  view.height = 440;
+  view.scale = 0.4;
+  return view;
+}
+
+void
+applyView (const pcl::PointCloud<pcl::PointXYZ> &input, const FrameView &view,
+           pcl::PointCloud<pcl::PointXYZ> &output)
+{
+  if (!input.isOrganized ())
+    throw FrameError ("a view needs an organized cloud");
+  if (view.x < 0 || view.y < 0 || view.width <= 0 || view.height <= 0 || !(view.scale > 0.0) ||
+      view.x + view.width > static_cast<int> (input.width) ||
+      view.y + view.height > static_cast<int> (input.height) || view.outputWidth () < 1 ||
+      view.outputHeight () < 1)
+    throw FrameError ("view crop " + std::to_string (view.width) + "x" + std::to_string (view.height) + "+" +
+                      std::to_string (view.x) + "+" + std::to_string (view.y) + " does not fit a " +
+                      std::to_string (input.width) + "x" + std::to_string (input.height) + " frame");
+  const int ow = view.outputWidth (), oh = view.outputHeight ();
+  pcl::PointCloud<pcl::PointXYZ> result (ow, oh);
+  for (int v = 0; v < oh; ++v)
+    for (int u = 0; u < ow; ++u)
+    {
+      const cv::Point s = view.sourcePixel (u, v);
+      result (u, v) = input (s.x, s.y);
+    }
+  result.is_dense = false;
+  result.header = input.header;
+  output = std::move (result);
+}
+}  // namespace agex

@@ -1,0 +1,307 @@
+// With contour_shape_predictor.cpp, the only translation unit that includes dlib.
+#include <agex/landmarks/contour_shape_predictor.h>
+#include <agex/landmarks/people_detector.h>
+#include <agex/common/pixel_box.h>
+#include <agex/io/atomic_file.h>
+
+#include "dlib_rect.h"
+
+#include <dlib/image_processing.h>
+#include <dlib/image_transforms/image_pyramid.h>
+#include <dlib/opencv/cv_image.h>
+#include <dlib/svm_threaded.h>
+
+#include <opencv2/imgproc.hpp>
+#include <opencv2/objdetect.hpp>
+
+#include <algorithm>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+#include <tuple>
+
+namespace agex
+{
+namespace
+{
+/** Highest score first; ties by position, so that the order never depends on the search. */
+void
+sortByScore (std::vector<PersonDetection> &people)
+{
+  std::sort (people.begin (), people.end (), [] (const PersonDetection &a, const PersonDetection &b) {
+    return std::make_tuple (-a.score, a.box.y, a.box.x, a.box.width) <
+           std::make_tuple (-b.score, b.box.y, b.box.x, b.box.width);
+  });
+}
+
+using detail::toDlib;
+using detail::toCv;
+using Scanner = dlib::scan_fhog_pyramid<dlib::pyramid_down<6>>;
+constexpr char kMagic[] = "agex_people_detector_fhog 2";
+
+
+}  // namespace
+
+struct PeopleDetector::Impl
+{
+  bool opencv_default = false;
+  int upsample = 0;
+  double scale = 1.0;
+  dlib::object_detector<Scanner> fhog;
+  cv::HOGDescriptor hog;
+};
+
+PeopleDetector::PeopleDetector () = default;
+PeopleDetector::~PeopleDetector () = default;
+PeopleDetector::PeopleDetector (PeopleDetector &&) noexcept = default;
+PeopleDetector &PeopleDetector::operator= (PeopleDetector &&) noexcept = default;
+
+PeopleDetector
+PeopleDetector::train (const std::vector<cv::Mat> &grey_images, const std::vector<std::vector<cv::Rect>> &boxes,
+                       const PeopleDetectorTrainingParams &params, std::size_t *ignored)
+{
+  return train (grey_images, boxes, std::vector<std::vector<cv::Rect>> (boxes.size ()), params, ignored);
+}
+
+PeopleDetector
+PeopleDetector::train (const std::vector<cv::Mat> &grey_images, const std::vector<std::vector<cv::Rect>> &boxes,
+                       const std::vector<std::vector<cv::Rect>> &ignore_regions,
+                       const PeopleDetectorTrainingParams &params, std::size_t *ignored)
+{
+  if (grey_images.size () != boxes.size () || grey_images.empty ())
+    throw std::invalid_argument ("people detector training: one box list per image needed");
+  if (ignore_regions.size () != boxes.size ())
+    throw std::invalid_argument ("people detector training: one ignore-region list per image needed");
+  if (!(params.scale > 0.05 && params.scale <= 4.0))
+    throw std::invalid_argument ("people detector training: scale must lie in (0.05, 4]");
+  dlib::array<dlib::array2d<unsigned char>> images (grey_images.size ());
+  std::vector<std::vector<dlib::rectangle>> targets (grey_images.size ()), regions (grey_images.size ());
+  const auto scaled = [&] (const cv::Rect &box) {
+    return toDlib (cv::Rect (cv::Point (static_cast<int> (std::lround (box.x * params.scale)),
+                                        static_cast<int> (std::lround (box.y * params.scale))),
+                             cv::Size (static_cast<int> (std::lround (box.width * params.scale)),
+                                       static_cast<int> (std::lround (box.height * params.scale)))));
+  };
+  for (std::size_t i = 0; i < grey_images.size (); ++i)
+  {
+    cv::Mat grey = toGrey (grey_images[i]);
+    // At least one pixel: OpenCV asserts on an empty target size, and a tiny image simply
+    // holds no box the window can reach (removed below).
+    if (params.scale != 1.0 && !grey.empty ())
+      cv::resize (grey, grey,
+                  cv::Size (std::max (1, cvRound (grey.cols * params.scale)), std::max (1, cvRound (grey.rows * params.scale))),
+                  0, 0, cv::INTER_AREA);
+    dlib::assign_image (images[i], dlib::cv_image<unsigned char> (grey));
+    for (const cv::Rect &box : boxes[i])
+      targets[i].push_back (scaled (box));
+    for (const cv::Rect &box : ignore_regions[i])
+      regions[i].push_back (scaled (box));
+  }
+  for (int u = 0; u < params.upsample; ++u)
+    dlib::upsample_image_dataset<dlib::pyramid_down<2>> (images, targets, regions);
+  if (params.add_flips)
+    dlib::add_image_left_right_flips (images, targets, regions);
+
+  Scanner scanner;
+  scanner.set_detection_window_size (params.window_width, params.window_height);
+  dlib::structural_object_detection_trainer<Scanner> trainer (scanner);
+  trainer.set_num_threads (params.num_threads ? params.num_threads : std::max (1u, std::thread::hardware_concurrency ()));
+  trainer.set_c (params.c);
+  trainer.set_epsilon (params.epsilon);
+  if (params.verbose)
+    trainer.be_verbose ();
+  // Boxes no window position can reach would make the problem infeasible: drop them.
+  const std::vector<std::vector<dlib::rectangle>> removed = dlib::remove_unobtainable_rectangles (trainer, images, targets);
+  std::size_t removed_count = 0, kept = 0;
+  for (std::size_t i = 0; i < removed.size (); ++i)
+  {
+    removed_count += removed[i].size ();
+    kept += targets[i].size ();
+  }
+  if (ignored)
+    *ignored = removed_count;
+  if (kept == 0)
+    throw std::invalid_argument ("people detector training: no box the " + std::to_string (params.window_width) + "x" +
+                                 std::to_string (params.window_height) + " window can match");
+  PeopleDetector detector;
+  detector.impl_ = std::make_unique<Impl> ();
+  detector.impl_->upsample = params.upsample;
+  detector.impl_->scale = params.scale;
+  std::vector<std::vector<dlib::rectangle>> ignore = removed;
+  for (std::size_t i = 0; i < ignore.size (); ++i)
+    ignore[i].insert (ignore[i].end (), regions[i].begin (), regions[i].end ());
+  detector.impl_->fhog = trainer.train (images, targets, ignore);
+  return detector;
+}
+
+PeopleDetector
+PeopleDetector::openCvDefault (double scale)
+{
+  if (!(scale > 0.05 && scale <= 4.0))
+    throw std::invalid_argument ("OpenCV people detector: scale must lie in (0.05, 4]");
+  PeopleDetector detector;
+  detector.impl_ = std::make_unique<Impl> ();
+  detector.impl_->opencv_default = true;
+  detector.impl_->scale = scale;
+  detector.impl_->hog.setSVMDetector (cv::HOGDescriptor::getDefaultPeopleDetector ());
+  return detector;
+}
+
+PeopleDetector
+PeopleDetector::load (const std::string &path)
+{
+  std::ifstream in (path, std::ios::binary);
+  if (!in)
+    throw std::runtime_error (path + ": cannot open the people detector");
+  std::string magic;
+  std::getline (in, magic);
+  if (magic != kMagic)
+    throw std::runtime_error (path + ": not an agex people detector (expected the header '" + std::string (kMagic) +
+                              "')");
+  PeopleDetector detector;
+  detector.impl_ = std::make_unique<Impl> ();
+  try
+  {
+    int upsample = 0;
+    double scale = 1.0;
+    dlib::deserialize (upsample, in);
+    dlib::deserialize (scale, in);
+    dlib::deserialize (detector.impl_->fhog, in);
+    if (upsample < 0 || upsample > 4 || !(scale > 0.05 && scale <= 4.0))
+      throw std::runtime_error ("bad upsample or scale");
+    detector.impl_->upsample = upsample;
+    detector.impl_->scale = scale;
+  }
+  catch (const std::exception &e)
+  {
+    throw std::runtime_error (path + ": damaged people detector (" + std::string (e.what ()) + ")");
+  }
+  return detector;
+}
+
+void
+PeopleDetector::save (const std::string &path) const
+{
+  if (!impl_ || impl_->opencv_default)
+    throw std::logic_error ("PeopleDetector::save: only trained detectors can be saved");
+  std::ostringstream out;
+  out << kMagic << "\n";
+  dlib::serialize (impl_->upsample, out);
+  dlib::serialize (impl_->scale, out);
+  dlib::serialize (impl_->fhog, out);
+  writeFileAtomic (path, out.str ());
+}
+
+bool
+PeopleDetector::isOpenCvDefault () const
+{
+  return impl_ && impl_->opencv_default;
+}
+
+std::string
+PeopleDetector::description () const
+{
+  if (!impl_)
+    return "none";
+  if (impl_->opencv_default)
+    return "OpenCV HOG people detector (Dalal-Triggs, 64x128)" +
+           (impl_->scale != 1.0 ? ", scale " + std::to_string (impl_->scale) : std::string ());
+  const Scanner &scanner = impl_->fhog.get_scanner ();
+  return "fhog detector, window " + std::to_string (scanner.get_detection_window_width ()) + "x" +
+         std::to_string (scanner.get_detection_window_height ()) + ", upsample " + std::to_string (impl_->upsample) +
+         ", scale " + std::to_string (impl_->scale);
+}
+
+std::vector<PersonDetection>
+PeopleDetector::detect (const cv::Mat &image, double threshold) const
+{
+  if (!impl_)
+    throw std::logic_error ("PeopleDetector::detect: no detector");
+  std::vector<PersonDetection> people;
+  if (image.empty ())
+    return people;
+  const cv::Mat grey = toGrey (image);
+  cv::Mat resized = grey;
+  // An image that shrinks to nothing holds no person the detector could see.
+  const cv::Size scaled_size (cvRound (grey.cols * impl_->scale), cvRound (grey.rows * impl_->scale));
+  if (scaled_size.width < 1 || scaled_size.height < 1)
+    return people;
+  if (impl_->scale != 1.0)
+    cv::resize (grey, resized, scaled_size, 0, 0,
+                impl_->scale < 1.0 ? cv::INTER_AREA : cv::INTER_LINEAR);
+  if (impl_->opencv_default)
+  {
+    // HOGDescriptor::detectMultiScale's pyramid (steps of 1.05, then groups of at least 3
+    // windows), run level by level here: OpenCV 4.6 scans the levels in parallel and appends
+    // boxes and scores under separate locks, so a score could end up paired with another
+    // level's box, and the order changed from run to run.
+    std::vector<cv::Rect> found;
+    std::vector<double> weights;
+    const cv::HOGDescriptor &hog = impl_->hog;
+    double level = 1.0;
+    for (int n = 0; n < hog.nlevels; ++n, level *= 1.05)
+    {
+      const cv::Size size (cvRound (resized.cols / level), cvRound (resized.rows / level));
+      if (size.width < hog.winSize.width || size.height < hog.winSize.height)
+        break;
+      cv::Mat scaled = resized;
+      if (n > 0)
+        cv::resize (resized, scaled, size, 0, 0, cv::INTER_LINEAR);
+      std::vector<cv::Point> hits;
+      std::vector<double> hit_scores;
+      hog.detect (scaled, hits, hit_scores, threshold, cv::Size (8, 8), cv::Size (0, 0));
+      for (std::size_t i = 0; i < hits.size () && i < hit_scores.size (); ++i)
+      {
+        found.emplace_back (cvRound (hits[i].x * level), cvRound (hits[i].y * level),
+                            cvRound (hog.winSize.width * level), cvRound (hog.winSize.height * level));
+        weights.push_back (hit_scores[i]);
+      }
+    }
+    hog.groupRectangles (found, weights, 2, 0.2);
+    for (std::size_t i = 0; i < found.size (); ++i)
+    {
+      // The 64x128 window holds a person about 96 pixels tall in its middle: report the
+      // square box of the person as agex_annotate would.
+      const cv::Rect &r = found[i];
+      const double side = 0.75 * r.height / impl_->scale;
+      const double cx = (r.x + 0.5 * r.width) / impl_->scale, cy = (r.y + 0.5 * r.height) / impl_->scale;
+      people.push_back ({cv::Rect (static_cast<int> (std::lround (cx - side / 2)), static_cast<int> (std::lround (cy - side / 2)),
+                                   static_cast<int> (std::lround (side)), static_cast<int> (std::lround (side))),
+                         i < weights.size () ? weights[i] : 0.0});
+    }
+    sortByScore (people);
+    return people;
+  }
+  std::vector<dlib::rect_detection> detections;
+  if (impl_->upsample == 0)
+    impl_->fhog (dlib::cv_image<unsigned char> (resized), detections, threshold);
+  else
+  {
+    dlib::array2d<unsigned char> scaled;
+    dlib::assign_image (scaled, dlib::cv_image<unsigned char> (resized));
+    for (int u = 0; u < impl_->upsample; ++u)
+      dlib::pyramid_up (scaled);
+    impl_->fhog (scaled, detections, threshold);
+  }
+  const double scale = 1.0 / ((1 << impl_->upsample) * impl_->scale);
+  for (const dlib::rect_detection &d : detections)
+  {
+    cv::Rect box = toCv (d.rect);
+    box = cv::Rect (static_cast<int> (std::lround (box.x * scale)), static_cast<int> (std::lround (box.y * scale)),
+                    static_cast<int> (std::lround (box.width * scale)), static_cast<int> (std::lround (box.height * scale)));
+    people.push_back ({box, d.detection_confidence});
+  }
+  sortByScore (people);
+  return people;
+}
+
+double
+boxIoU (const cv::Rect &a, const cv::Rect &b)
+{
+  auto box = [] (const cv::Rect &r) {
+    return PixelBox{static_cast<float> (r.x), static_cast<float> (r.y), static_cast<float> (r.x + r.width),
+                    static_cast<float> (r.y + r.height)};
+  };
+  return intersectionOverUnion (box (a), box (b));
+}
+}  // namespace agex

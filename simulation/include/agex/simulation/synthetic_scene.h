@@ -1,0 +1,406 @@
+#pragma once
+// Synthetic labelled depth frames (doc/synthetic.md): people posed by real motion
+// capture (BVH), a body made of capsules and ellipsoids on the skeleton, a room
+// (floor, back wall, optional side wall, clutter boxes or a desk), a randomly
+// placed camera, a ray-casting renderer and two sensor models:
+//   sr4000  144x176 portrait time-of-flight: 3x3 supersampling whose samples are
+//           blended as the sensor blends returns (mixed pixels at silhouettes),
+//           range noise growing as the returned amplitude falls (~depth^2)
+//   kinect  640x480 structured light: disparity quantisation and noise (depth
+//           steps grow with depth^2), projector shadows and holes at depth edges,
+//           no mixed pixels
+// and head / hand / foot tip labels (agex::PartLabel) with a depth-test visibility.
+//
+// Everything is a function of the seed: frame i draws from its own generator seeded
+// from (seed, i), with hand-written uniform and normal variates on std::mt19937_64's
+// raw output, so the same seed gives the same bytes on every run and platform with
+// the same floating point.
+
+#include <agex/simulation/bvh.h>
+#include <agex/io/dataset.h>
+#include <agex/io/frame_io.h>
+#include <agex/simulation/synth_mesh.h>
+
+#include <pcl/point_cloud.h>
+#include <pcl/point_types.h>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include <array>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <random>
+#include <string>
+#include <vector>
+
+namespace agex
+{
+/** Deterministic random numbers: std::mt19937_64 (fully specified by the standard)
+  * with uniform and Box-Muller normal variates computed here, never through the
+  * implementation-defined std:: distributions. */
+class SynthRng
+{
+public:
+  explicit SynthRng (std::uint64_t seed) : engine_ (seed) {}
+  /** A generator for item `index` of a run seeded with `seed` (SplitMix64 of both). */
+  static SynthRng forItem (std::uint64_t seed, std::uint64_t index);
+
+  std::uint64_t raw () { return engine_ (); }
+  /** Uniform in [0, 1), 53 random bits. */
+  double uniform ();
+  double uniform (double lo, double hi) { return lo + (hi - lo) * uniform (); }
+  /** Uniform integer in [0, n). */
+  int index (int n);
+  /** Standard normal (Box-Muller, both values of a pair are used). */
+  double normal ();
+  double normal (double mean, double sigma) { return mean + sigma * normal (); }
+  bool chance (double p) { return uniform () < p; }
+
+private:
+  std::mt19937_64 engine_;
+  bool have_spare_ = false;
+  double spare_ = 0.0;
+};
+
+// ---------------------------------------------------------------------------
+// Sensors
+
+enum class SynthSensor
+{
+  Sr4000,
+  Kinect,
+  Bonn  ///< the Bonn frames' look: kinect, 8-bit depth in 1.6 cm steps, their 144x176 portrait view
+};
+
+/** "sr4000", "kinect" or "bonn". */
+const char *synthSensorName (SynthSensor sensor);
+/** Inverse of synthSensorName; false for an unknown name. */
+bool parseSynthSensor (const std::string &name, SynthSensor &sensor);
+
+/** The image a sensor model produces and its noise parameters (doc/synthetic.md). The
+  * bonn model's image is the 144x176 portrait view (bonnPortraitView) of a kinect
+  * frame; it is rendered with renderSensorModel(Bonn), the kinect model. */
+struct SensorModel
+{
+  SynthSensor sensor = SynthSensor::Sr4000;
+  int width = 144, height = 176;
+  CameraIntrinsics intrinsics;
+  int supersample = 3;           ///< samples per pixel side (sr4000: 3x3, blended)
+  double min_range = 0.1, max_range = 5.0;  ///< metres; outside -> NaN
+  // sr4000 (time of flight): sigma = tof_sigma0 + tof_sigma_k / amplitude, with
+  // amplitude = reflectivity * cos(incidence) / range^2 averaged over the samples.
+  double tof_sigma0 = 0.001, tof_sigma_k = 0.0008, tof_sigma_max = 0.05;
+  double tof_min_amplitude = 0.008;  ///< below: NaN (the sensor's confidence cut)
+  // kinect (structured light): disparity in 1/8 px, q = 8 * f_ir * b / z, with
+  // noise sigma_q, rounded; z = 8 f_ir b / q. Projector at +b along x.
+  double kinect_f_ir = 580.0, kinect_baseline = 0.075, kinect_sigma_q = 0.5;
+  double kinect_min_cos = 0.12;       ///< incidence flatter than this: NaN
+  double kinect_edge_drop = 0.6;      ///< NaN chance of a pixel at a depth edge
+  double kinect_edge_drop_near = 0.2; ///< ... of a pixel beside one
+};
+
+/** The model of a sensor with its default parameters: the frames it writes. */
+SensorModel sensorModel (SynthSensor sensor);
+/** The model a sensor's frames are rendered with (kinect for bonn, else sensorModel). */
+SensorModel renderSensorModel (SynthSensor sensor);
+
+/** Depth step of the Bonn frames: 8-bit grey levels of 0.016 m (../shared/README.md). */
+constexpr double kBonnDepthStep = 0.016;
+
+// ---------------------------------------------------------------------------
+// Scene primitives
+
+/** What a primitive (and a rendered pixel) belongs to. */
+enum class SynthObject : std::uint8_t
+{
+  None = 0,
+  Floor = 1,
+  Wall = 2,
+  Clutter = 3,
+  Person = 4
+};
+
+/** What a body surface is dressed in, for colour frames (SynthOptions::colour); the
+  * room's surfaces take their colour from their SynthObject. */
+enum class SynthMaterial : std::uint8_t
+{
+  Default = 0,
+  Skin = 1,    ///< head, neck, hands
+  Top = 2,     ///< torso and arms
+  Bottom = 3,  ///< legs
+  Shoes = 4
+};
+
+struct SynthPrimitive
+{
+  enum class Shape
+  {
+    Capsule,    ///< segment a-b, radius
+    Ellipsoid,  ///< centre, axes (columns: orthogonal semi-axis vectors)
+    Box,        ///< centre, axes (columns: orthogonal half-extent vectors)
+    Plane,      ///< normal . x = offset (infinite)
+    Mesh        ///< triangles of `mesh`, placed by the rotation `axes` and the translation `centre`
+  };
+  Shape shape = Shape::Capsule;
+  SynthObject object = SynthObject::None;
+  float reflectivity = 0.7f;  ///< 0..1, for the time-of-flight amplitude
+  SynthMaterial material = SynthMaterial::Default;
+  Eigen::Vector3d a = Eigen::Vector3d::Zero (), b = Eigen::Vector3d::Zero ();
+  double radius = 0.0;
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero ();
+  Eigen::Matrix3d axes = Eigen::Matrix3d::Identity ();
+  Eigen::Matrix3d inverse = Eigen::Matrix3d::Identity ();  ///< axes^-1 (kept by the factories)
+  Eigen::Vector3d normal = Eigen::Vector3d::UnitY ();
+  double offset = 0.0;
+  std::shared_ptr<const SynthMesh> mesh;
+
+  static SynthPrimitive capsule (const Eigen::Vector3d &a, const Eigen::Vector3d &b, double radius, SynthObject object);
+  static SynthPrimitive ellipsoid (const Eigen::Vector3d &centre, const Eigen::Matrix3d &axes, SynthObject object);
+  static SynthPrimitive box (const Eigen::Vector3d &centre, const Eigen::Matrix3d &axes, SynthObject object);
+  static SynthPrimitive plane (const Eigen::Vector3d &normal, double offset, SynthObject object);
+  /** A triangle mesh in the scene's frame (identity placement). */
+  static SynthPrimitive triangleMesh (std::shared_ptr<const SynthMesh> mesh, SynthObject object);
+
+  /** The same primitive after a rigid transform. */
+  SynthPrimitive transformed (const Eigen::Isometry3d &transform) const;
+  /** Bounding sphere; false for a plane (unbounded). */
+  bool boundingSphere (Eigen::Vector3d &centre, double &radius) const;
+  /** \brief Nearest ray hit at t > t_min along origin + t * direction (direction of
+    * unit length); sets the outward unit normal. Returns -1 if none. */
+  double intersect (const Eigen::Vector3d &origin, const Eigen::Vector3d &direction, double t_min,
+                    Eigen::Vector3d *normal) const;
+  /** Approximate signed distance of p to the surface (exact for capsules, boxes and
+    * planes, first order for ellipsoids); negative inside. Meshes give the unsigned
+    * distance. */
+  double distance (const Eigen::Vector3d &p) const;
+};
+
+/** A scene in one coordinate frame. */
+struct SynthScene
+{
+  std::vector<SynthPrimitive> primitives;
+  SynthScene transformed (const Eigen::Isometry3d &transform) const;
+  /** Smallest signed distance of p to the primitives of one object class (+inf if none). */
+  double distance (const Eigen::Vector3d &p, SynthObject object) const;
+};
+
+// ---------------------------------------------------------------------------
+// Bodies
+
+/** Per-subject body shape; every length of the body model is in metres. */
+struct BodyParams
+{
+  double height_scale = 1.0;  ///< multiplies the skeleton (and every size below)
+  double girth = 1.0;         ///< multiplies torso and limb radii
+  double head_scale = 1.0;    ///< multiplies the head ellipsoid
+  double arm_girth = 1.0;     ///< extra factor on arm radii
+  double leg_girth = 1.0;     ///< extra factor on leg radii
+  double torso_depth = 1.0;   ///< front-back size of the torso
+  double reflectivity = 0.7;  ///< clothes and skin, 0..1
+
+  /** Draws a subject: height 0.92-1.08, girth 0.85-1.25, head 0.93-1.07, arms and legs
+    * 0.9-1.12, torso depth 0.9-1.2, reflectivity 0.45-0.9. */
+  static BodyParams random (SynthRng &rng);
+  /** "height_scale=1.02 girth=0.93 ..." */
+  std::string describe () const;
+};
+
+/** The joints the body model hangs on, found by name in a BVH skeleton. Two naming
+  * schemes are known: CMU ASF conversions (LeftUpLeg, LeftLeg, LeftFoot, LeftToeBase,
+  * Spine, Spine1, Neck, Head, LeftArm, LeftForeArm, LeftHand, LeftHandIndex1) and the
+  * bvh11 / CMU 131 scheme (LeftHip, LeftKnee, LeftAnkle, LeftToe, Chest, Chest2,
+  * lowerneck, Head, LeftShoulder, LeftElbow, LeftWrist, LFingers); index 0 = left. */
+struct SkeletonMap
+{
+  int root = -1, spine_base = -1, spine_mid = -1, neck = -1, head = -1, head_end = -1;
+  int shoulder[2] = {-1, -1}, elbow[2] = {-1, -1}, wrist[2] = {-1, -1}, hand_end[2] = {-1, -1};
+  int hip[2] = {-1, -1}, knee[2] = {-1, -1}, ankle[2] = {-1, -1}, toe[2] = {-1, -1}, toe_end[2] = {-1, -1};
+  /** Rest-pose directions in the file's world frame: the subject's left, up and forward. */
+  Eigen::Matrix3d rest_basis = Eigen::Matrix3d::Identity ();
+
+  /** \brief Finds the joints. \throws BvhError naming the file and the missing joint */
+  static SkeletonMap find (const BvhMotion &motion);
+};
+
+/** A motion capture clip ready to pose bodies. */
+struct MotionClip
+{
+  BvhMotion motion;
+  SkeletonMap map;
+  double scale = 1.0;          ///< metres per file unit
+  bool scale_auto = true;      ///< scale was detected (autoBvhScale)
+  std::string sequence;        ///< the file's stem
+
+  /** \brief Reads a BVH file; scale <= 0 means auto (autoBvhScale).
+    * \throws BvhError naming the file (and line) */
+  static MotionClip load (const std::string &path, double scale = 0.0);
+};
+
+/** A posed body in the clip's world frame (metres, Y up). */
+struct BodyModel
+{
+  std::vector<SynthPrimitive> primitives;  ///< all SynthObject::Person
+  /** Tip and base of the head (0), the hands (1: left, 2: right) and feet (3: left,
+    * 4: right); tips on the body surface. */
+  Eigen::Vector3d tip[5], base[5];
+  /** Per tip: the primitives of its part (head ellipsoid; hand; foot and toes) and the
+    * depth tolerance of its visibility test: the part's radius + 3 cm, since the
+    * surface seen near a tip on the part's silhouette is up to a radius in front of it. */
+  std::vector<int> tip_primitives[5];
+  double tip_tolerance[5] = {0, 0, 0, 0, 0};
+  /** Middle of the torso (between the root and the neck). */
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero ();
+  /** Lowest and highest point of the body (Y). */
+  double lowest = 0.0, highest = 0.0;
+  /** The same body after a rigid transform. */
+  BodyModel transformed (const Eigen::Isometry3d &transform) const;
+};
+
+/** \brief Poses the body model on frame `frame` of a clip (-1 = rest pose). */
+BodyModel buildBody (const MotionClip &clip, int frame, const BodyParams &params);
+
+class HumanMesh;
+
+/** \brief Poses the MakeHuman mesh body on frame `frame` of a clip (-1 = rest pose):
+  * the mesh is scaled to the clip's rest height times params.height_scale, shaped by
+  * the other params, and each bone follows the motion capture segment it lies on
+  * (rotation of the segment's joint, then turned so the bone points where the segment
+  * does; doc/synthetic.md). One mesh primitive per HumanMesh::Part, in its order
+  * (trunk, head, hands, feet, arms, legs); tips are mesh vertices (top of the head, middle finger tips,
+  * toe fronts), bases the neck, wrist and ankle joints. */
+BodyModel buildMeshBody (const MotionClip &clip, int frame, const BodyParams &params, const HumanMesh &mesh);
+
+/** Heads of the mesh's bones (indexed like mesh.bones()) posed as buildMeshBody poses
+  * them: the posed skeleton. */
+std::vector<Eigen::Vector3d> meshBoneHeads (const MotionClip &clip, int frame, const BodyParams &params,
+                                            const HumanMesh &mesh);
+
+/** Lowest point (Y) of the posed mesh body's feet and a sample of its other vertices:
+  * what the floor is placed by, without building the whole body. */
+double meshBodyLowest (const MotionClip &clip, int frame, const BodyParams &params, const HumanMesh &mesh);
+
+/** Height of the body model in the clip's rest pose (head top to sole), metres. */
+double restStandingHeight (const MotionClip &clip, const BodyParams &params = BodyParams ());
+
+// ---------------------------------------------------------------------------
+// Rendering
+
+/** How a label's visibility was decided (parallel to SynthFrame::labels). */
+struct SynthLabelCheck
+{
+  std::vector<int> primitives;  ///< scene primitives of the tip's part
+  double tolerance = 0.05;      ///< metres
+};
+
+/** A rendered frame, in the camera frame (x right, y down, z forward, metres). */
+struct SynthFrame
+{
+  pcl::PointCloud<pcl::PointXYZ> cloud;  ///< organized, NaN = invalid (the sensor output)
+  std::vector<PartLabel> labels;         ///< head, hands, feet (frame id left empty)
+  std::vector<SynthLabelCheck> label_checks;  ///< parallel to labels
+  // Ground truth per pixel (row-major), noise free:
+  std::vector<SynthObject> object;  ///< what most of the pixel's samples hit
+  std::vector<int> primitive;       ///< scene primitive seen at the pixel centre, -1 if none
+  std::vector<float> ideal_z;       ///< depth at the pixel centre, NaN if nothing
+  std::vector<float> sample_min_z, sample_max_z;  ///< over the pixel's samples (NaN if none hit)
+  /** Colour image (row-major r, g, b), filled by shadeColour; empty for depth-only frames. */
+  std::vector<std::array<std::uint8_t, 3>> colour;
+  SynthScene scene;                 ///< the scene in the camera frame
+  Eigen::Isometry3d world_to_camera = Eigen::Isometry3d::Identity ();
+  // What was drawn:
+  int clip = 0, clip_frame = 0, subject = 0;
+  std::string sequence;
+};
+
+/** \brief Renders a scene (camera frame) with a sensor model; draws the noise from rng. */
+void renderScene (const SynthScene &scene, const SensorModel &sensor, SynthRng &rng, SynthFrame &frame);
+
+/** \brief Paints a rendered frame as a colour camera would see it (frame.colour), with
+  * random appearance so that 2D models trained on it cannot lean on any one look: per
+  * frame random skin tone, clothes (top, bottom, shoes), wall, floor and clutter colours,
+  * a random light with Lambert shading, faint clothes texture, a strong random pattern on
+  * the room's surfaces, a 3x3 blur and pixel noise. Uses the pixel-centre primitives of
+  * renderScene; registered with the depth (the colour camera sits at the depth camera).
+  * Draws everything from rng, never from the frame's depth noise. */
+void shadeColour (const SensorModel &sensor, SynthRng &rng, SynthFrame &frame);
+
+/** \brief Labels for the body's tips and bases (camera frame, the body's primitives
+  * first in frame.scene), projected with the sensor's intrinsics. A tip is visible if
+  * its pixel is in the image and within labelWindow() pixels of it a pixel with a valid
+  * depth within the part's tolerance of the tip's depth sees the tip's own part (the
+  * noise-free centre ray hits one of its primitives). Instance 0 is the one on the
+  * image's left (smaller tip u). Fills frame.labels and frame.label_checks. */
+void makeLabels (const BodyModel &body_in_camera, const SensorModel &sensor, SynthFrame &frame);
+
+/** Half size of the label visibility window: 1 (3x3) for sr4000, 2 (5x5) for kinect. */
+int labelWindow (const SensorModel &sensor);
+
+/** Options of a synthetic run. */
+struct SynthOptions
+{
+  std::vector<std::string> motion_files;
+  double bvh_scale = 0.0;  ///< metres per BVH unit, <= 0: auto per file
+  SynthSensor sensor = SynthSensor::Sr4000;
+  std::uint64_t seed = 1;
+  int subjects = 4;        ///< body shapes drawn from the seed
+  double min_distance = 1.5, max_distance = 3.5;  ///< camera to body, metres
+  double min_height = 0.8, max_height = 1.6;      ///< camera above the floor, metres
+  /** A MakeHuman directory (base.obj, default.mhskel, default_weights.mhw) for mesh
+    * bodies (buildMeshBody); empty: capsule and ellipsoid bodies (buildBody). */
+  std::string body_mesh;
+  /** Also paint colour frames (shadeColour; sr4000 and kinect only); the depth is the same
+    * as without. */
+  bool colour = false;
+};
+
+/** Draws and renders frames; frame i depends only on the options and i. */
+class SynthGenerator
+{
+public:
+  /** \throws BvhError naming a bad motion file, HumanMeshError naming a bad mesh file,
+    * std::invalid_argument for bad options */
+  explicit SynthGenerator (const SynthOptions &options);
+
+  const SynthOptions &options () const { return options_; }
+  const SensorModel &sensor () const { return sensor_; }
+  const std::vector<MotionClip> &clips () const { return clips_; }
+  const std::vector<BodyParams> &subjects () const { return subjects_; }
+
+  /** The mesh bodies are made of, null for capsule bodies. */
+  const HumanMesh *mesh () const { return mesh_.get (); }
+  /** The body a subject has on a clip frame: mesh or capsules, as the options say. */
+  BodyModel body (int clip, int clip_frame, int subject) const;
+
+  /** Renders frame `index`. */
+  SynthFrame render (std::uint64_t index) const;
+  /** The dataset description: sensor, size, intrinsics, provenance. */
+  DatasetInfo datasetInfo () const;
+
+private:
+  SynthOptions options_;
+  SensorModel sensor_, render_sensor_;
+  std::vector<MotionClip> clips_;
+  std::vector<BodyParams> subjects_;
+  std::shared_ptr<const HumanMesh> mesh_;
+  std::vector<std::vector<double>> floor_;  ///< [clip][subject]: floor height, clip frame
+};
+
+/** Frame ids: "000123". */
+std::string synthFrameId (std::uint64_t index);
+
+/** Timings of writeSyntheticDataset. */
+struct SynthRunStats
+{
+  int frames = 0;
+  double render_ms = 0.0, write_ms = 0.0;  ///< totals
+  int labels = 0, visible_labels = 0;
+};
+
+/** \brief Renders `frames` frames and writes them as an agex dataset (atomically,
+  * through DatasetWriter). progress(done, total) is called after each frame.
+  * \throws DatasetError if output exists and overwrite is false; BvhError */
+SynthRunStats writeSyntheticDataset (const SynthGenerator &generator, int frames, const std::string &output,
+                                     bool overwrite, const std::function<void (int, int)> &progress = {});
+}  // namespace agex

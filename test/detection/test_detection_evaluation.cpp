@@ -1,0 +1,152 @@
+// The detector's evaluation and settings: the box-overlap (IoU) and distance criteria on
+// hand-built detections, and the model settings' schema and ranges.
+
+#include <agex/common/pixel_box.h>
+#include <agex/detection/detection_evaluation.h>
+#include <agex/detection/detector_model.h>
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace
+{
+TEST (BoxOverlap, IntersectionOverUnionOfHandBuiltBoxes)
+{
+  using agex::PixelBox;
+  const PixelBox a{0.f, 0.f, 2.f, 2.f};
+  EXPECT_FLOAT_EQ (agex::intersectionOverUnion (a, a), 1.f);
+  EXPECT_FLOAT_EQ (agex::intersectionOverUnion (a, PixelBox{1.f, 0.f, 3.f, 2.f}), 2.f / 6.f);
+  EXPECT_FLOAT_EQ (agex::intersectionOverUnion (a, PixelBox{1.f, 1.f, 3.f, 3.f}), 1.f / 7.f);
+  EXPECT_FLOAT_EQ (agex::intersectionOverUnion (a, PixelBox{2.f, 0.f, 4.f, 2.f}), 0.f);  // touching
+  EXPECT_FLOAT_EQ (agex::intersectionOverUnion (a, PixelBox{0.5f, 0.5f, 1.5f, 1.5f}), 0.25f);
+  EXPECT_FLOAT_EQ (agex::intersectionOverUnion (a, PixelBox{}), 0.f);  // empty
+
+  // A head (0.25 m) at 2 m with f = 100 px: a 12.5 px square around the pixel's centre.
+  const PixelBox head = agex::partBox (agex::BodyPart::Head, 50.f, 40.f, 2.f, 1.f, 100.f);
+  EXPECT_FLOAT_EQ (head.u0, 50.5f - 6.25f);
+  EXPECT_FLOAT_EQ (head.u1, 50.5f + 6.25f);
+  EXPECT_FLOAT_EQ (head.v0, 40.5f - 6.25f);
+  // Twice the scale: twice the side.
+  const PixelBox big = agex::partBox (agex::BodyPart::Head, 50.f, 40.f, 2.f, 2.f, 100.f);
+  EXPECT_FLOAT_EQ (big.u1 - big.u0, 25.f);
+}
+
+agex::BodyPartDetection
+detectionAt (agex::BodyPart part, int u, int v, float z, float confidence, float scale = 1.f)
+{
+  agex::BodyPartDetection d;
+  d.part = part;
+  d.confidence = confidence;
+  d.u = u;
+  d.v = v;
+  d.position = Eigen::Vector3f ((u - 40.f) * z / 100.f, (v - 30.f) * z / 100.f, z);
+  d.scale = scale;
+  return d;
+}
+
+TEST (BoxOverlap, DetectionEvaluationMatchesByOverlap)
+{
+  // One head label at pixel (50, 40), 2 m away, f = 100 px: its box is 12.5 px wide.
+  agex::PartLabel head;
+  head.part = agex::BodyPart::Head;
+  head.tip_px = Eigen::Vector2f (50.f, 40.f);
+  head.tip = Eigen::Vector3f ((50.f - 40.f) * 2.f / 100.f, (40.f - 30.f) * 2.f / 100.f, 2.f);
+  const std::vector<agex::PartLabel> labels{head};
+
+  auto ap = [&] (const std::vector<agex::BodyPartDetection> &detections) {
+    auto evaluation = agex::DetectionEvaluation::boxOverlap (0.5f, 100.f);
+    evaluation.addFrame (detections, labels);
+    return evaluation.averagePrecision (agex::BodyPart::Head);
+  };
+  // 2 px off: IoU = 10.5 / 14.5 = 0.72, a match.
+  EXPECT_DOUBLE_EQ (ap ({detectionAt (agex::BodyPart::Head, 52, 40, 2.f, 0.9f)}), 1.0);
+  // 5 px off (10 cm, inside the distance criterion): IoU = 7.5 / 17.5 = 0.43, no match.
+  EXPECT_DOUBLE_EQ (ap ({detectionAt (agex::BodyPart::Head, 55, 40, 2.f, 0.9f)}), 0.0);
+  // Right place, wrong class: no head found.
+  EXPECT_DOUBLE_EQ (ap ({detectionAt (agex::BodyPart::Hand, 50, 40, 2.f, 0.9f)}), 0.0);
+  // A window twice the part's size on the spot: IoU = 1/4, no match.
+  EXPECT_DOUBLE_EQ (ap ({detectionAt (agex::BodyPart::Head, 50, 40, 2.f, 0.9f, 2.f)}), 0.0);
+  // A confident miss ranked above the hit halves the precision at full recall.
+  EXPECT_DOUBLE_EQ (ap ({detectionAt (agex::BodyPart::Head, 10, 10, 2.f, 0.95f),
+                         detectionAt (agex::BodyPart::Head, 51, 41, 2.f, 0.9f)}),
+                    0.5);
+  // The two hits on one part: only the more confident one counts, the other is a false positive.
+  EXPECT_DOUBLE_EQ (ap ({detectionAt (agex::BodyPart::Head, 51, 40, 2.f, 0.9f),
+                         detectionAt (agex::BodyPart::Head, 50, 41, 2.f, 0.8f)}),
+                    1.0);
+
+  // The same 5 px miss is a hit for the 10 cm criterion (the tip is 0.1 m away).
+  agex::DetectionEvaluation by_distance (0.101f);
+  by_distance.addFrame ({detectionAt (agex::BodyPart::Head, 55, 40, 2.f, 0.9f)}, labels);
+  EXPECT_DOUBLE_EQ (by_distance.averagePrecision (agex::BodyPart::Head), 1.0);
+}
+
+TEST (DetectorSettings, KindStoredInTheSettingsAndChecked)
+{
+  agex::DetectorSettings settings;
+  settings.kind = agex::DetectorKind::SlidingWindow;
+  settings.sliding_window.stride = 2;
+  settings.sliding_window.scales = {0.8f, 1.25f};
+  nlohmann::json doc = settings.toJson ();
+  const auto read = agex::DetectorSettings::fromJson (doc, "sw.yml");
+  EXPECT_EQ (read.kind, agex::DetectorKind::SlidingWindow);
+  EXPECT_EQ (read.sliding_window.stride, 2);
+  EXPECT_EQ (read.sliding_window.scales, (std::vector<float>{0.8f, 1.25f}));
+  // Models written before the field existed are AGEX models; an unknown kind is an error.
+  doc.erase ("detector");
+  EXPECT_EQ (agex::DetectorSettings::fromJson (doc, "m.yml").kind, agex::DetectorKind::Agex);
+  doc["detector"] = "cascade";
+  EXPECT_THROW (agex::DetectorSettings::fromJson (doc, "m.yml"), std::invalid_argument);
+}
+
+/** The message of what f throws (empty if it does not). */
+template <typename F>
+std::string
+messageOf (F &&f)
+{
+  try
+  {
+    f ();
+  }
+  catch (const std::exception &e)
+  {
+    return e.what ();
+  }
+  return std::string ();
+}
+
+TEST (DetectorSettings, EveryPipelineSettingIsRangeCheckedWithItsKeyNamed)
+{
+  // The cases that once took minutes or gigabytes per frame, or gave silent nonsense.
+  const std::vector<std::pair<std::string, nlohmann::json>> bad{{"mixed_window_radius", 1e6},
+                                                                {"median_window", 1e5},
+                                                                {"k", 1e8},
+                                                                {"delta_connected", -1},
+                                                                {"delta_connected", 100},
+                                                                {"floor_distance", 0},
+                                                                {"spur_iterations", 1e9},
+                                                                {"min_mesh_size", 0.5},
+                                                                {"crop_min", nlohmann::json::array ({0, 0})},
+                                                                {"remove_floor", "yes"}};
+  for (const auto &[key, value] : bad)
+  {
+    nlohmann::json doc = agex::DetectorSettings ().toJson ();
+    doc["pipeline"][key] = value;
+    const std::string message = messageOf ([&] { agex::DetectorSettings::fromJson (doc, "m.yml"); });
+    EXPECT_NE (message.find ("m.yml: pipeline." + key), std::string::npos) << key << " = " << value.dump () << ": '"
+                                                                          << message << "'";
+  }
+  nlohmann::json doc = agex::DetectorSettings ().toJson ();
+  doc["pipeline"].erase ("k");
+  EXPECT_NE (messageOf ([&] { agex::DetectorSettings::fromJson (doc, "m.yml"); }).find ("pipeline.k is missing"),
+             std::string::npos);
+  // The defaults and the bundled model's own values pass.
+  EXPECT_NO_THROW (agex::DetectorSettings::fromJson (agex::DetectorSettings ().toJson (), "m.yml"));
+  agex::DepthPipelineParams params;
+  params.k = 16;
+  EXPECT_NO_THROW (params.validate ());
+  params.mixed_window_radius = 1000000;
+  EXPECT_THROW (params.validate (), std::invalid_argument);
+}
+}  // namespace

@@ -997,18 +997,24 @@ private:
 };
 }  // namespace
 
-void
-renderScene (const SynthScene &scene, const SensorModel &sensor, SynthRng &rng, SynthFrame &frame)
+namespace
 {
-  if (sensor.sensor == SynthSensor::Bonn)
-    throw std::invalid_argument ("renderScene: bonn frames are rendered with renderSensorModel (SynthSensor::Bonn), "
-                                 "then made into the Bonn view");
+/** The unit ray through (sub)pixel (u, v) of a sensor. */
+struct PixelRays
+{
+  const CameraIntrinsics &k;
+  Eigen::Vector3d operator() (double u, double v) const
+  {
+    return Eigen::Vector3d ((u - k.cx) / k.fx, (v - k.cy) / k.fy, 1.0).normalized ();
+  }
+};
+
+/** Sizes the frame's cloud and ground truth to the sensor, everything invalid. */
+void
+resetFrame (const SynthScene &scene, const SensorModel &sensor, SynthFrame &frame)
+{
   const int w = sensor.width, h = sensor.height;
   const std::size_t n = static_cast<std::size_t> (w) * h;
-  const CameraIntrinsics &k = sensor.intrinsics;
-  const int ss = std::max (1, sensor.supersample);
-  const Eigen::Vector3d origin = Eigen::Vector3d::Zero ();
-
   frame.scene = scene;
   frame.cloud = pcl::PointCloud<pcl::PointXYZ> (static_cast<std::uint32_t> (w), static_cast<std::uint32_t> (h),
                                                 pcl::PointXYZ (kNaN, kNaN, kNaN));
@@ -1018,154 +1024,219 @@ renderScene (const SynthScene &scene, const SensorModel &sensor, SynthRng &rng, 
   frame.ideal_z.assign (n, kNaN);
   frame.sample_min_z.assign (n, kNaN);
   frame.sample_max_z.assign (n, kNaN);
-  std::vector<float> range (n, kNaN);  // measured range along the pixel-centre ray, before noise
-  std::vector<float> amplitudes (sensor.sensor == SynthSensor::Sr4000 ? n : 0, 0.0f);
+}
 
-  const Binner binner (scene, sensor, 0.0, 0.0);
-  auto pixelRay = [&] (double u, double v) {
-    return Eigen::Vector3d ((u - k.cx) / k.fx, (v - k.cy) / k.fy, 1.0).normalized ();
-  };
-  // Pass 1: the ray through every pixel centre.
-  std::vector<Hit> centre (n);
+/** Pass 1: the nearest hit of the ray through every pixel centre (row-major). */
+std::vector<Hit>
+traceCentreRays (const Binner &binner, const SensorModel &sensor, const PixelRays &ray)
+{
+  const int w = sensor.width, h = sensor.height;
+  const Eigen::Vector3d origin = Eigen::Vector3d::Zero ();
+  std::vector<Hit> centre (static_cast<std::size_t> (w) * h);
   for (int v = 0; v < h; ++v)
     for (int u = 0; u < w; ++u)
-      centre[static_cast<std::size_t> (v) * w + u] = binner.trace (u, v, origin, pixelRay (u, v), true);
+      centre[static_cast<std::size_t> (v) * w + u] = binner.trace (u, v, origin, ray (u, v), true);
+  return centre;
+}
 
-  // Pass 2: supersampling (ss x ss samples) where the centre rays of the pixel and its
-  // 8 neighbours do not all see the same primitive; elsewhere the centre sample stands
-  // for all of them (a smooth surface averages to its centre value).
-  std::vector<Hit> hits (static_cast<std::size_t> (ss) * ss);
-  std::vector<Eigen::Vector3d> dirs (hits.size ());
-  for (int v = 0; v < h; ++v)
-    for (int u = 0; u < w; ++u)
+/** True if the centre rays of pixel (u, v) and of its 8 neighbours (clamped at the
+  * border) all see the same primitive. */
+bool
+neighboursSeeTheSamePrimitive (const std::vector<Hit> &centre, int u, int v, int w, int h)
+{
+  const std::size_t i = static_cast<std::size_t> (v) * w + u;
+  for (int dv = -1; dv <= 1; ++dv)
+    for (int du = -1; du <= 1; ++du)
     {
-      const std::size_t i = static_cast<std::size_t> (v) * w + u;
-      bool uniform = true;
-      if (ss > 1)
-        for (int dv = -1; dv <= 1 && uniform; ++dv)
-          for (int du = -1; du <= 1; ++du)
-          {
-            const int uu = std::clamp (u + du, 0, w - 1), vv = std::clamp (v + dv, 0, h - 1);
-            if (centre[static_cast<std::size_t> (vv) * w + uu].primitive != centre[i].primitive)
-            {
-              uniform = false;
-              break;
-            }
-          }
-      std::size_t count = 1;
-      if (uniform)
-      {
-        hits[0] = centre[i];
-        dirs[0] = pixelRay (u, v);
-      }
-      else
-      {
-        count = hits.size ();
-        for (int sy = 0; sy < ss; ++sy)
-          for (int sx = 0; sx < ss; ++sx)
-          {
-            const std::size_t s = static_cast<std::size_t> (sy) * ss + sx;
-            const double ou = (sx + 0.5) / ss - 0.5, ov = (sy + 0.5) / ss - 0.5;
-            dirs[s] = pixelRay (u + ou, v + ov);
-            hits[s] = (ou == 0.0 && ov == 0.0) ? centre[i] : binner.trace (u, v, origin, dirs[s], true);
-          }
-      }
-      const double weight = uniform ? static_cast<double> (hits.size ()) : 1.0;
-      int counts[5] = {0, 0, 0, 0, 0};
-      double nearest[5] = {kInf, kInf, kInf, kInf, kInf};
-      double zmin = kInf, zmax = -kInf;
-      double amp_sum = 0.0, amp_range = 0.0;
-      for (std::size_t s = 0; s < count; ++s)
-      {
-        const Hit &hit = hits[s];
-        if (hit.t < 0)
-          continue;
-        const double z = hit.t * dirs[s].z ();
-        zmin = std::min (zmin, z);
-        zmax = std::max (zmax, z);
-        const int obj = static_cast<int> (scene.primitives[hit.primitive].object);
-        counts[obj] += static_cast<int> (weight);
-        nearest[obj] = std::min (nearest[obj], z);
-        const double amp = weight * scene.primitives[hit.primitive].reflectivity * hit.cos / (hit.t * hit.t);
-        amp_sum += amp;
-        amp_range += amp * hit.t;
-      }
-      // Ground truth.
-      int best = 0;
-      for (int o = 1; o < 5; ++o)
-        if (counts[o] > counts[best] || (counts[o] == counts[best] && counts[o] > 0 && nearest[o] < nearest[best]))
-          best = o;
-      frame.object[i] = counts[best] > 0 ? static_cast<SynthObject> (best) : SynthObject::None;
-      if (centre[i].t > 0)
-      {
-        frame.ideal_z[i] = static_cast<float> (centre[i].t * pixelRay (u, v).z ());
-        frame.primitive[i] = centre[i].primitive;
-      }
-      if (zmin <= zmax)
-      {
-        frame.sample_min_z[i] = static_cast<float> (zmin);
-        frame.sample_max_z[i] = static_cast<float> (zmax);
-      }
-      if (sensor.sensor == SynthSensor::Sr4000)
-      {
-        // Time of flight: the pixel integrates the returns of all its samples, each
-        // weighted by its amplitude (reflectivity * cos / range^2): mixed pixels.
-        const double amplitude = amp_sum / static_cast<double> (hits.size ());
-        if (amp_sum <= 0 || amplitude < sensor.tof_min_amplitude)
-          continue;
-        const double r = amp_range / amp_sum;
-        if (r < sensor.min_range || r > sensor.max_range)
-          continue;
-        range[i] = static_cast<float> (r);
-        amplitudes[i] = static_cast<float> (amplitude);
-      }
-      else
-      {
-        const Hit &hit = centre[i];
-        if (hit.t < 0 || hit.cos < sensor.kinect_min_cos)
-          continue;
-        const double z = hit.t * dirs[0].z ();
-        if (z < sensor.min_range || z > sensor.max_range)
-          continue;
-        range[i] = static_cast<float> (hit.t);
-      }
+      const int uu = std::clamp (u + du, 0, w - 1), vv = std::clamp (v + dv, 0, h - 1);
+      if (centre[static_cast<std::size_t> (vv) * w + uu].primitive != centre[i].primitive)
+        return false;
     }
+  return true;
+}
 
-  if (sensor.sensor == SynthSensor::Sr4000)
+/** The samples a pixel integrates: hits[0..count) along dirs[0..count), each standing
+  * for `weight` of the ss x ss samples. */
+struct PixelSamples
+{
+  std::vector<Hit> hits;
+  std::vector<Eigen::Vector3d> dirs;
+  std::size_t count = 1;
+  double weight = 1.0;
+  bool uniform = true;  ///< the centre sample stands for all of them
+
+  explicit PixelSamples (int ss) : hits (static_cast<std::size_t> (ss) * ss), dirs (hits.size ()) {}
+};
+
+/** Pass 2 for one pixel: ss x ss samples where the centre rays of the pixel and its 8
+  * neighbours do not all see the same primitive; elsewhere the centre sample stands for
+  * all of them (a smooth surface averages to its centre value). */
+void
+samplePixel (const Binner &binner, const std::vector<Hit> &centre, const PixelRays &ray, int u, int v, int w, int h,
+             int ss, PixelSamples &samples)
+{
+  const std::size_t i = static_cast<std::size_t> (v) * w + u;
+  const Eigen::Vector3d origin = Eigen::Vector3d::Zero ();
+  samples.uniform = ss <= 1 || neighboursSeeTheSamePrimitive (centre, u, v, w, h);
+  samples.count = 1;
+  if (samples.uniform)
   {
-    for (int v = 0; v < h; ++v)
-      for (int u = 0; u < w; ++u)
-      {
-        const std::size_t i = static_cast<std::size_t> (v) * w + u;
-        if (!std::isfinite (range[i]))
-          continue;
-        const double noise = rng.normal ();
-        const double amplitude = amplitudes[i];
-        const double sigma = std::min (sensor.tof_sigma0 + sensor.tof_sigma_k / amplitude, sensor.tof_sigma_max);
-        const double r = range[i] + sigma * noise;
-        const Eigen::Vector3d d = Eigen::Vector3d ((u - k.cx) / k.fx, (v - k.cy) / k.fy, 1.0).normalized ();
-        const double z = r * d.z ();
-        frame.cloud.points[i] = pcl::PointXYZ (static_cast<float> ((u - k.cx) * z / k.fx),
-                                               static_cast<float> ((v - k.cy) * z / k.fy), static_cast<float> (z));
-      }
-    return;
+    samples.hits[0] = centre[i];
+    samples.dirs[0] = ray (u, v);
   }
+  else
+  {
+    samples.count = samples.hits.size ();
+    for (int sy = 0; sy < ss; ++sy)
+      for (int sx = 0; sx < ss; ++sx)
+      {
+        const std::size_t s = static_cast<std::size_t> (sy) * ss + sx;
+        const double ou = (sx + 0.5) / ss - 0.5, ov = (sy + 0.5) / ss - 0.5;
+        samples.dirs[s] = ray (u + ou, v + ov);
+        samples.hits[s] = (ou == 0.0 && ov == 0.0) ? centre[i] : binner.trace (u, v, origin, samples.dirs[s], true);
+      }
+  }
+  samples.weight = samples.uniform ? static_cast<double> (samples.hits.size ()) : 1.0;
+}
 
-  // Kinect: projector shadows, holes at depth edges, disparity quantisation.
-  const double fb8 = 8.0 * sensor.kinect_f_ir * sensor.kinect_baseline;
-  const Eigen::Vector3d projector (sensor.kinect_baseline, 0.0, 0.0);
-  // The segment from the projector (at +x) to a point seen at pixel u runs along the
-  // pixel's row to the right, so an occluder at depth z_o shadows pixels up to
-  // f b / z_o to its left: widen the occluders' bins to the left by that.
-  const Binner shadow_bins (scene, sensor, 0.0, k.fx * sensor.kinect_baseline);
-  std::vector<float> z (n, kNaN);
+/** What a pixel's samples add up to: hits per object class, the nearest depth per
+  * class, the depth range, and the amplitude sums of the time-of-flight blend. */
+struct PixelIntegral
+{
+  int counts[5] = {0, 0, 0, 0, 0};
+  double nearest[5] = {kInf, kInf, kInf, kInf, kInf};
+  double zmin = kInf, zmax = -kInf;
+  double amp_sum = 0.0, amp_range = 0.0;
+};
+
+PixelIntegral
+integratePixel (const SynthScene &scene, const PixelSamples &samples)
+{
+  PixelIntegral sum;
+  for (std::size_t s = 0; s < samples.count; ++s)
+  {
+    const Hit &hit = samples.hits[s];
+    if (hit.t < 0)
+      continue;
+    const double z = hit.t * samples.dirs[s].z ();
+    sum.zmin = std::min (sum.zmin, z);
+    sum.zmax = std::max (sum.zmax, z);
+    const int obj = static_cast<int> (scene.primitives[hit.primitive].object);
+    sum.counts[obj] += static_cast<int> (samples.weight);
+    sum.nearest[obj] = std::min (sum.nearest[obj], z);
+    const double amp = samples.weight * scene.primitives[hit.primitive].reflectivity * hit.cos / (hit.t * hit.t);
+    sum.amp_sum += amp;
+    sum.amp_range += amp * hit.t;
+  }
+  return sum;
+}
+
+/** The noise-free ground truth of pixel i: the object most samples hit (ties: the
+  * nearer), the centre ray's depth and primitive, the samples' depth range. */
+void
+recordGroundTruth (const PixelIntegral &sum, const Hit &centre, const Eigen::Vector3d &centre_ray, std::size_t i,
+                   SynthFrame &frame)
+{
+  int best = 0;
+  for (int o = 1; o < 5; ++o)
+    if (sum.counts[o] > sum.counts[best] ||
+        (sum.counts[o] == sum.counts[best] && sum.counts[o] > 0 && sum.nearest[o] < sum.nearest[best]))
+      best = o;
+  frame.object[i] = sum.counts[best] > 0 ? static_cast<SynthObject> (best) : SynthObject::None;
+  if (centre.t > 0)
+  {
+    frame.ideal_z[i] = static_cast<float> (centre.t * centre_ray.z ());
+    frame.primitive[i] = centre.primitive;
+  }
+  if (sum.zmin <= sum.zmax)
+  {
+    frame.sample_min_z[i] = static_cast<float> (sum.zmin);
+    frame.sample_max_z[i] = static_cast<float> (sum.zmax);
+  }
+}
+
+/** Time of flight: the pixel integrates the returns of all its samples, each weighted
+  * by its amplitude (reflectivity * cos / range^2): mixed pixels. False (no
+  * measurement) below the confidence cut or outside the range. */
+bool
+measureTimeOfFlight (const PixelIntegral &sum, std::size_t samples, const SensorModel &sensor, float &range,
+                     float &amplitude)
+{
+  const double a = sum.amp_sum / static_cast<double> (samples);
+  if (sum.amp_sum <= 0 || a < sensor.tof_min_amplitude)
+    return false;
+  const double r = sum.amp_range / sum.amp_sum;
+  if (r < sensor.min_range || r > sensor.max_range)
+    return false;
+  range = static_cast<float> (r);
+  amplitude = static_cast<float> (a);
+  return true;
+}
+
+/** Structured light: the centre ray's range, if the surface is not too oblique and its
+  * depth in range. */
+bool
+measureStructuredLight (const Hit &centre, const Eigen::Vector3d &centre_ray, const SensorModel &sensor, float &range)
+{
+  if (centre.t < 0 || centre.cos < sensor.kinect_min_cos)
+    return false;
+  const double z = centre.t * centre_ray.z ();
+  if (z < sensor.min_range || z > sensor.max_range)
+    return false;
+  range = static_cast<float> (centre.t);
+  return true;
+}
+
+/** The point at range r along pixel (u, v)'s ray, as agex::depthImageToCloud places it. */
+pcl::PointXYZ
+pointOnPixelRay (const CameraIntrinsics &k, int u, int v, double z)
+{
+  return pcl::PointXYZ (static_cast<float> ((u - k.cx) * z / k.fx), static_cast<float> ((v - k.cy) * z / k.fy),
+                        static_cast<float> (z));
+}
+
+/** sr4000: range noise along the ray, growing as the amplitude falls. */
+void
+addTimeOfFlightNoise (const std::vector<float> &range, const std::vector<float> &amplitudes, const SensorModel &sensor,
+                      SynthRng &rng, SynthFrame &frame)
+{
+  const CameraIntrinsics &k = sensor.intrinsics;
+  const int w = sensor.width, h = sensor.height;
   for (int v = 0; v < h; ++v)
     for (int u = 0; u < w; ++u)
     {
       const std::size_t i = static_cast<std::size_t> (v) * w + u;
       if (!std::isfinite (range[i]))
         continue;
-      const Eigen::Vector3d d = pixelRay (u, v);
+      const double noise = rng.normal ();
+      const double amplitude = amplitudes[i];
+      const double sigma = std::min (sensor.tof_sigma0 + sensor.tof_sigma_k / amplitude, sensor.tof_sigma_max);
+      const double r = range[i] + sigma * noise;
+      const Eigen::Vector3d d = Eigen::Vector3d ((u - k.cx) / k.fx, (v - k.cy) / k.fy, 1.0).normalized ();
+      frame.cloud.points[i] = pointOnPixelRay (k, u, v, r * d.z ());
+    }
+}
+
+/** Kinect projector shadows: the depth (z) of every measured pixel that the projector
+  * (kinect_baseline to the camera's right, +x) lights, NaN for the others. */
+std::vector<float>
+projectorLitDepth (const SynthScene &scene, const SensorModel &sensor, const PixelRays &ray,
+                   const std::vector<float> &range)
+{
+  const int w = sensor.width, h = sensor.height;
+  const Eigen::Vector3d projector (sensor.kinect_baseline, 0.0, 0.0);
+  // The segment from the projector (at +x) to a point seen at pixel u runs along the
+  // pixel's row to the right, so an occluder at depth z_o shadows pixels up to
+  // f b / z_o to its left: widen the occluders' bins to the left by that.
+  const Binner shadow_bins (scene, sensor, 0.0, sensor.intrinsics.fx * sensor.kinect_baseline);
+  std::vector<float> z (range.size (), kNaN);
+  for (int v = 0; v < h; ++v)
+    for (int u = 0; u < w; ++u)
+    {
+      const std::size_t i = static_cast<std::size_t> (v) * w + u;
+      if (!std::isfinite (range[i]))
+        continue;
+      const Eigen::Vector3d d = ray (u, v);
       const Eigen::Vector3d p = d * range[i];
       if (!shadow_bins.anyAt (u, v))
       {
@@ -1179,13 +1250,20 @@ renderScene (const SynthScene &scene, const SensorModel &sensor, SynthRng &rng, 
         continue;
       z[i] = static_cast<float> (p.z ());
     }
-  // Depth edges on the noise-free depth (nothing hit counts as far).
-  std::vector<std::uint8_t> edge (n, 0);
+  return z;
+}
+
+/** Depth edges on the noise-free depth: a 4-neighbour more than 4 cm + 3% of the depth
+  * away, or nothing (which counts as far). */
+std::vector<std::uint8_t>
+depthEdges (const std::vector<float> &ideal_z, int w, int h)
+{
+  std::vector<std::uint8_t> edge (ideal_z.size (), 0);
   for (int v = 0; v < h; ++v)
     for (int u = 0; u < w; ++u)
     {
       const std::size_t i = static_cast<std::size_t> (v) * w + u;
-      const float zi = frame.ideal_z[i];
+      const float zi = ideal_z[i];
       if (!std::isfinite (zi))
         continue;
       const int du[4] = {1, -1, 0, 0}, dv[4] = {0, 0, 1, -1};
@@ -1194,7 +1272,7 @@ renderScene (const SynthScene &scene, const SensorModel &sensor, SynthRng &rng, 
         const int uu = u + du[q], vv = v + dv[q];
         if (uu < 0 || vv < 0 || uu >= w || vv >= h)
           continue;
-        const float zj = frame.ideal_z[static_cast<std::size_t> (vv) * w + uu];
+        const float zj = ideal_z[static_cast<std::size_t> (vv) * w + uu];
         if (!std::isfinite (zj) || std::abs (zj - zi) > 0.04 + 0.03 * zi)
         {
           edge[i] = 1;
@@ -1202,24 +1280,38 @@ renderScene (const SynthScene &scene, const SensorModel &sensor, SynthRng &rng, 
         }
       }
     }
+  return edge;
+}
+
+/** True if a pixel of the 3x3 window around (u, v) is a depth edge. */
+bool
+besideAnEdge (const std::vector<std::uint8_t> &edge, int u, int v, int w, int h)
+{
+  for (int dv = -1; dv <= 1; ++dv)
+    for (int du = -1; du <= 1; ++du)
+    {
+      const int uu = u + du, vv = v + dv;
+      if (uu >= 0 && vv >= 0 && uu < w && vv < h && edge[static_cast<std::size_t> (vv) * w + uu])
+        return true;
+    }
+  return false;
+}
+
+/** Kinect: holes at depth edges, then disparity noise and quantisation in 1/8 pixel. */
+void
+dropEdgesAndQuantiseDisparity (const std::vector<float> &z, const std::vector<std::uint8_t> &edge,
+                               const SensorModel &sensor, SynthRng &rng, SynthFrame &frame)
+{
+  const CameraIntrinsics &k = sensor.intrinsics;
+  const int w = sensor.width, h = sensor.height;
+  const double fb8 = 8.0 * sensor.kinect_f_ir * sensor.kinect_baseline;
   for (int v = 0; v < h; ++v)
     for (int u = 0; u < w; ++u)
     {
       const std::size_t i = static_cast<std::size_t> (v) * w + u;
       if (!std::isfinite (z[i]))
         continue;
-      bool near_edge = false;
-      if (!edge[i])
-        for (int dv = -1; dv <= 1 && !near_edge; ++dv)
-          for (int du = -1; du <= 1; ++du)
-          {
-            const int uu = u + du, vv = v + dv;
-            if (uu >= 0 && vv >= 0 && uu < w && vv < h && edge[static_cast<std::size_t> (vv) * w + uu])
-            {
-              near_edge = true;
-              break;
-            }
-          }
+      const bool near_edge = !edge[i] && besideAnEdge (edge, u, v, w, h);
       if ((edge[i] && rng.uniform () < sensor.kinect_edge_drop) ||
           (near_edge && rng.uniform () < sensor.kinect_edge_drop_near))
         continue;
@@ -1229,9 +1321,51 @@ renderScene (const SynthScene &scene, const SensorModel &sensor, SynthRng &rng, 
       const double zq = fb8 / q;
       if (zq < sensor.min_range || zq > sensor.max_range)
         continue;
-      frame.cloud.points[i] = pcl::PointXYZ (static_cast<float> ((u - k.cx) * zq / k.fx),
-                                             static_cast<float> ((v - k.cy) * zq / k.fy), static_cast<float> (zq));
+      frame.cloud.points[i] = pointOnPixelRay (k, u, v, zq);
     }
+}
+}  // namespace
+
+void
+renderScene (const SynthScene &scene, const SensorModel &sensor, SynthRng &rng, SynthFrame &frame)
+{
+  if (sensor.sensor == SynthSensor::Bonn)
+    throw std::invalid_argument ("renderScene: bonn frames are rendered with renderSensorModel (SynthSensor::Bonn), "
+                                 "then made into the Bonn view");
+  const int w = sensor.width, h = sensor.height;
+  const std::size_t n = static_cast<std::size_t> (w) * h;
+  const bool tof = sensor.sensor == SynthSensor::Sr4000;
+  const PixelRays ray{sensor.intrinsics};
+  resetFrame (scene, sensor, frame);
+
+  const Binner binner (scene, sensor, 0.0, 0.0);
+  const std::vector<Hit> centre = traceCentreRays (binner, sensor, ray);
+
+  // Pass 2: each pixel's samples give its ground truth and its noise-free measurement.
+  std::vector<float> range (n, kNaN);  // measured range along the pixel-centre ray, before noise
+  std::vector<float> amplitudes (tof ? n : 0, 0.0f);
+  PixelSamples samples (std::max (1, sensor.supersample));
+  for (int v = 0; v < h; ++v)
+    for (int u = 0; u < w; ++u)
+    {
+      const std::size_t i = static_cast<std::size_t> (v) * w + u;
+      samplePixel (binner, centre, ray, u, v, w, h, std::max (1, sensor.supersample), samples);
+      const PixelIntegral sum = integratePixel (scene, samples);
+      recordGroundTruth (sum, centre[i], ray (u, v), i, frame);
+      if (tof)
+        measureTimeOfFlight (sum, samples.hits.size (), sensor, range[i], amplitudes[i]);
+      else
+        measureStructuredLight (centre[i], samples.dirs[0], sensor, range[i]);
+    }
+
+  if (tof)
+  {
+    addTimeOfFlightNoise (range, amplitudes, sensor, rng, frame);
+    return;
+  }
+  // Kinect: projector shadows, holes at depth edges, disparity quantisation.
+  const std::vector<float> z = projectorLitDepth (scene, sensor, ray, range);
+  dropEdgesAndQuantiseDisparity (z, depthEdges (frame.ideal_z, w, h), sensor, rng, frame);
 }
 
 int
@@ -1395,6 +1529,190 @@ SynthGenerator::body (int clip, int clip_frame, int subject) const
   return mesh_ ? buildMeshBody (c, clip_frame, params, *mesh_) : buildBody (c, clip_frame, params);
 }
 
+namespace
+{
+/** The camera at `camera` looking at `aim` (Y up: x right, y down, z forward), then
+  * pitched by `pitch` about its x axis and rolled by `roll` about its view axis. */
+Eigen::Isometry3d
+worldToCamera (const Eigen::Vector3d &camera, const Eigen::Vector3d &aim, double roll, double pitch)
+{
+  const Eigen::Vector3d up = Eigen::Vector3d::UnitY ();
+  const Eigen::Vector3d forward = (aim - camera).normalized ();
+  const Eigen::Vector3d right = forward.cross (up).normalized ();
+  const Eigen::Vector3d down = forward.cross (right);
+  Eigen::Matrix3d rotation;
+  rotation.row (0) = right;
+  rotation.row (1) = down;
+  rotation.row (2) = forward;
+  rotation = Eigen::AngleAxisd (roll, Eigen::Vector3d::UnitZ ()).toRotationMatrix () *
+             Eigen::AngleAxisd (pitch, Eigen::Vector3d::UnitX ()).toRotationMatrix () * rotation;
+  Eigen::Isometry3d world_to_camera = Eigen::Isometry3d::Identity ();
+  world_to_camera.linear () = rotation;
+  world_to_camera.translation () = -(rotation * camera);
+  return world_to_camera;
+}
+
+/** Where the room is laid out: on the floor at floor_y, `ahead` the camera's horizontal
+  * view direction, `lateral` to its left; walls and clutter are placed from `anchor`
+  * (on the floor plan) and kept clear of the people's primitives and of the camera. */
+struct RoomFrame
+{
+  Eigen::Vector3d anchor, ahead, lateral, camera;
+  double floor_y = 0.0;
+  const std::vector<SynthPrimitive> *people = nullptr;
+  /** Clutter stands at anchor + ahead * [along_min, wall distance] + lateral * [-across, across]. */
+  double along_min = -1.2, across = 1.8;
+};
+
+/** Moves a wall (normal . x = offset, normal towards the people) behind every person's
+  * primitive. */
+double
+clearOfPeople (const RoomFrame &room, const Eigen::Vector3d &normal, double offset)
+{
+  for (const auto &p : *room.people)
+  {
+    Eigen::Vector3d c;
+    double r;
+    p.boundingSphere (c, r);
+    offset = std::min (offset, normal.dot (c) - r - 0.05);
+  }
+  return offset;
+}
+
+/** Adds the floor, the back wall `wall_behind` beyond the anchor (turned by up to 30
+  * degrees) and, in half the frames, a side wall; returns wall_behind. */
+double
+addFloorAndWalls (SynthRng &rng, const RoomFrame &room, SynthScene &world)
+{
+  const Eigen::Vector3d up = Eigen::Vector3d::UnitY ();
+  SynthPrimitive floor = SynthPrimitive::plane (up, room.floor_y, SynthObject::Floor);
+  floor.reflectivity = static_cast<float> (rng.uniform (0.25, 0.6));
+  world.primitives.push_back (floor);
+
+  const double wall_behind = rng.uniform (0.7, 2.0);
+  const double wall_yaw = rng.uniform (-30.0, 30.0) * M_PI / 180.0;
+  {
+    const Eigen::Vector3d normal = -(Eigen::AngleAxisd (wall_yaw, up) * room.ahead);
+    Eigen::Vector3d at = room.anchor + room.ahead * wall_behind;
+    const double offset = clearOfPeople (room, normal, normal.dot (at));
+    SynthPrimitive wall = SynthPrimitive::plane (normal, offset, SynthObject::Wall);
+    wall.reflectivity = static_cast<float> (rng.uniform (0.5, 0.9));
+    world.primitives.push_back (wall);
+  }
+  const bool side_wall = rng.chance (0.5);
+  const double side_sign = rng.chance (0.5) ? 1.0 : -1.0, side_distance = rng.uniform (1.0, 2.5);
+  const float side_reflectivity = static_cast<float> (rng.uniform (0.5, 0.9));
+  if (side_wall)
+  {
+    const Eigen::Vector3d normal = -side_sign * room.lateral;
+    const double offset =
+        clearOfPeople (room, normal, normal.dot (room.anchor + side_sign * room.lateral * side_distance));
+    if (normal.dot (room.camera) - offset > 0.3)
+    {
+      SynthPrimitive wall = SynthPrimitive::plane (normal, offset, SynthObject::Wall);
+      wall.reflectivity = side_reflectivity;
+      world.primitives.push_back (wall);
+    }
+  }
+  return wall_behind;
+}
+
+/** A spot on the floor for a piece of clutter of the given half diagonal: in the
+  * clutter area, clear of the people (10 cm) and the camera (40 cm), in front of the
+  * walls; false after 20 attempts. */
+bool
+placeClutter (SynthRng &rng, const RoomFrame &room, double wall_behind, const SynthScene &world, double half_diagonal,
+              Eigen::Vector3d &at)
+{
+  for (int attempt = 0; attempt < 20; ++attempt)
+  {
+    // Drawn across first, then along: the order earlier builds evaluated them in.
+    const double across = rng.uniform (-room.across, room.across);
+    const double along = rng.uniform (room.along_min, wall_behind);
+    at = room.anchor + room.ahead * along + room.lateral * across;
+    at.y () = room.floor_y;
+    bool ok = true;
+    for (const auto &p : *room.people)
+    {
+      Eigen::Vector3d c;
+      double r;
+      p.boundingSphere (c, r);
+      const Eigen::Vector2d dxz (c.x () - at.x (), c.z () - at.z ());
+      ok = ok && dxz.norm () > half_diagonal + r + 0.1;
+    }
+    const Eigen::Vector2d to_camera (room.camera.x () - at.x (), room.camera.z () - at.z ());
+    ok = ok && to_camera.norm () > half_diagonal + 0.4;
+    for (const auto &p : world.primitives)  // in front of the walls
+      if (p.object == SynthObject::Wall)
+        ok = ok && p.normal.dot (at) - p.offset > half_diagonal + 0.02;
+    if (ok)
+      return true;
+  }
+  return false;
+}
+
+/** A clutter box turned by `yaw` about the vertical. */
+void
+addClutterBox (SynthScene &world, const Eigen::Vector3d &centre, const Eigen::Vector3d &half, double yaw, float refl)
+{
+  const Eigen::Matrix3d r = Eigen::AngleAxisd (yaw, Eigen::Vector3d::UnitY ()).toRotationMatrix ();
+  SynthPrimitive b = SynthPrimitive::box (centre, r * half.asDiagonal (), SynthObject::Clutter);
+  b.reflectivity = refl;
+  world.primitives.push_back (b);
+}
+
+/** A desk: a top at 0.70-0.76 m on four legs, roughly facing the camera. */
+void
+addDesk (SynthRng &rng, const RoomFrame &room, double wall_behind, SynthScene &world)
+{
+  const Eigen::Vector3d up = Eigen::Vector3d::UnitY ();
+  const double half_z = rng.uniform (0.3, 0.4);  // last first: the order earlier builds used
+  const double half_x = rng.uniform (0.5, 0.8);
+  const Eigen::Vector3d half (half_x, 0.015, half_z);
+  const double top = rng.uniform (0.70, 0.76);
+  const double yaw = std::atan2 (room.ahead.x (), room.ahead.z ()) + rng.uniform (-0.3, 0.3);
+  const float refl = static_cast<float> (rng.uniform (0.3, 0.9));
+  Eigen::Vector3d at;
+  if (!placeClutter (rng, room, wall_behind, world, std::hypot (half.x (), half.z ()), at))
+    return;
+  addClutterBox (world, at + up * (top - half.y ()), half, yaw, refl);
+  const Eigen::Matrix3d r = Eigen::AngleAxisd (yaw, up).toRotationMatrix ();
+  for (const double sx : {-1.0, 1.0})
+    for (const double sz : {-1.0, 1.0})
+    {
+      const Eigen::Vector3d leg = at + r * Eigen::Vector3d (sx * (half.x () - 0.04), 0, sz * (half.z () - 0.04));
+      addClutterBox (world, leg + up * (0.5 * (top - 2 * half.y ())),
+                     Eigen::Vector3d (0.02, 0.5 * (top - 2 * half.y ()), 0.02), yaw, refl);
+    }
+}
+
+/** A box 0.2-0.7 m wide and 0.16-1 m tall standing on the floor. */
+void
+addBox (SynthRng &rng, const RoomFrame &room, double wall_behind, SynthScene &world)
+{
+  const double hz = rng.uniform (0.1, 0.35), hy = rng.uniform (0.08, 0.5), hx = rng.uniform (0.1, 0.35);  // last first
+  const Eigen::Vector3d half (hx, hy, hz);
+  const double yaw = rng.uniform (0.0, M_PI);
+  const float refl = static_cast<float> (rng.uniform (0.3, 0.9));
+  Eigen::Vector3d at;
+  if (placeClutter (rng, room, wall_behind, world, std::hypot (half.x (), half.z ()), at))
+    addClutterBox (world, at + Eigen::Vector3d::UnitY () * half.y (), half, yaw, refl);
+}
+
+/** The room of a frame: floor, walls, then a desk (a quarter of the frames) or 0-3 boxes. */
+void
+addRoom (SynthRng &rng, const RoomFrame &room, SynthScene &world)
+{
+  const double wall_behind = addFloorAndWalls (rng, room, world);
+  const bool desk = rng.chance (0.25);
+  const int boxes = desk ? 0 : rng.index (4);
+  if (desk)
+    addDesk (rng, room, wall_behind, world);
+  for (int b = 0; b < boxes; ++b)
+    addBox (rng, room, wall_behind, world);
+}
+}  // namespace
+
 SynthFrame
 SynthGenerator::render (std::uint64_t index) const
 {
@@ -1407,7 +1725,6 @@ SynthGenerator::render (std::uint64_t index) const
   frame.sequence = clip.sequence;
   const BodyModel body = this->body (frame.clip, frame.clip_frame, frame.subject);
   const double floor_y = floor_[frame.clip][frame.subject];
-  const Eigen::Vector3d up = Eigen::Vector3d::UnitY ();
 
   // Camera: around the person at a random azimuth, distance and height, aimed at the
   // torso with a jitter (sometimes a large one, so the person leaves the frame).
@@ -1421,132 +1738,24 @@ SynthGenerator::render (std::uint64_t index) const
   aim.x () += rng.normal (0.0, jitter);
   aim.y () += rng.normal (0.0, jitter);
   aim.z () += rng.normal (0.0, jitter);
-  const Eigen::Vector3d forward = (aim - camera).normalized ();
-  const Eigen::Vector3d right = forward.cross (up).normalized ();
-  const Eigen::Vector3d down = forward.cross (right);
-  Eigen::Matrix3d rotation;
-  rotation.row (0) = right;
-  rotation.row (1) = down;
-  rotation.row (2) = forward;
   const double roll = rng.normal (0.0, 3.0) * M_PI / 180.0, pitch = rng.normal (0.0, 2.0) * M_PI / 180.0;
-  rotation = Eigen::AngleAxisd (roll, Eigen::Vector3d::UnitZ ()).toRotationMatrix () *
-             Eigen::AngleAxisd (pitch, Eigen::Vector3d::UnitX ()).toRotationMatrix () * rotation;
-  Eigen::Isometry3d world_to_camera = Eigen::Isometry3d::Identity ();
-  world_to_camera.linear () = rotation;
-  world_to_camera.translation () = -(rotation * camera);
-  frame.world_to_camera = world_to_camera;
+  frame.world_to_camera = worldToCamera (camera, aim, roll, pitch);
 
   // The room: floor, back wall behind the person, maybe a side wall, clutter.
   SynthScene world;
   world.primitives = body.primitives;
-  auto clearOfBody = [&] (const Eigen::Vector3d &normal, double offset) {
-    // Moves a wall (normal . x = offset, normal towards the person) behind every body part.
-    for (const auto &p : body.primitives)
-    {
-      Eigen::Vector3d c;
-      double r;
-      p.boundingSphere (c, r);
-      offset = std::min (offset, normal.dot (c) - r - 0.05);
-    }
-    return offset;
-  };
-  SynthPrimitive floor = SynthPrimitive::plane (up, floor_y, SynthObject::Floor);
-  floor.reflectivity = static_cast<float> (rng.uniform (0.25, 0.6));
-  world.primitives.push_back (floor);
+  RoomFrame room;
+  room.anchor = body.centre;
+  room.ahead = aim - camera;
+  room.ahead.y () = 0.0;
+  room.ahead.normalize ();
+  room.lateral = Eigen::Vector3d::UnitY ().cross (room.ahead);  // to the camera's left
+  room.camera = camera;
+  room.floor_y = floor_y;
+  room.people = &body.primitives;
+  addRoom (rng, room, world);
 
-  Eigen::Vector3d ahead = aim - camera;
-  ahead.y () = 0.0;
-  ahead.normalize ();
-  const Eigen::Vector3d lateral = up.cross (ahead);  // to the camera's left
-  const double wall_behind = rng.uniform (0.7, 2.0);
-  const double wall_yaw = rng.uniform (-30.0, 30.0) * M_PI / 180.0;
-  {
-    const Eigen::Vector3d normal = -(Eigen::AngleAxisd (wall_yaw, up) * ahead);
-    Eigen::Vector3d at = body.centre + ahead * wall_behind;
-    const double offset = clearOfBody (normal, normal.dot (at));
-    SynthPrimitive wall = SynthPrimitive::plane (normal, offset, SynthObject::Wall);
-    wall.reflectivity = static_cast<float> (rng.uniform (0.5, 0.9));
-    world.primitives.push_back (wall);
-  }
-  const bool side_wall = rng.chance (0.5);
-  const double side_sign = rng.chance (0.5) ? 1.0 : -1.0, side_distance = rng.uniform (1.0, 2.5);
-  const float side_reflectivity = static_cast<float> (rng.uniform (0.5, 0.9));
-  if (side_wall)
-  {
-    const Eigen::Vector3d normal = -side_sign * lateral;
-    const double offset = clearOfBody (normal, normal.dot (body.centre + side_sign * lateral * side_distance));
-    if (normal.dot (camera) - offset > 0.3)
-    {
-      SynthPrimitive wall = SynthPrimitive::plane (normal, offset, SynthObject::Wall);
-      wall.reflectivity = side_reflectivity;
-      world.primitives.push_back (wall);
-    }
-  }
-  // Clutter: a desk or up to three boxes standing on the floor, clear of the person
-  // and the camera.
-  const bool desk = rng.chance (0.25);
-  const int boxes = desk ? 0 : rng.index (4);
-  auto place = [&] (double half_diagonal, Eigen::Vector3d &at) {
-    for (int attempt = 0; attempt < 20; ++attempt)
-    {
-      at = body.centre + ahead * rng.uniform (-1.2, wall_behind) + lateral * rng.uniform (-1.8, 1.8);
-      at.y () = floor_y;
-      bool ok = true;
-      for (const auto &p : body.primitives)
-      {
-        Eigen::Vector3d c;
-        double r;
-        p.boundingSphere (c, r);
-        const Eigen::Vector2d dxz (c.x () - at.x (), c.z () - at.z ());
-        ok = ok && dxz.norm () > half_diagonal + r + 0.1;
-      }
-      const Eigen::Vector2d to_camera (camera.x () - at.x (), camera.z () - at.z ());
-      ok = ok && to_camera.norm () > half_diagonal + 0.4;
-      for (const auto &p : world.primitives)  // in front of the walls
-        if (p.object == SynthObject::Wall)
-          ok = ok && p.normal.dot (at) - p.offset > half_diagonal + 0.02;
-      if (ok)
-        return true;
-    }
-    return false;
-  };
-  auto addBox = [&] (const Eigen::Vector3d &centre, const Eigen::Vector3d &half, double yaw, float refl) {
-    const Eigen::Matrix3d r = Eigen::AngleAxisd (yaw, up).toRotationMatrix ();
-    SynthPrimitive b = SynthPrimitive::box (centre, r * half.asDiagonal (), SynthObject::Clutter);
-    b.reflectivity = refl;
-    world.primitives.push_back (b);
-  };
-  if (desk)
-  {
-    const Eigen::Vector3d half (rng.uniform (0.5, 0.8), 0.015, rng.uniform (0.3, 0.4));
-    const double top = rng.uniform (0.70, 0.76);
-    const double yaw = std::atan2 (ahead.x (), ahead.z ()) + rng.uniform (-0.3, 0.3);
-    const float refl = static_cast<float> (rng.uniform (0.3, 0.9));
-    Eigen::Vector3d at;
-    if (place (std::hypot (half.x (), half.z ()), at))
-    {
-      addBox (at + up * (top - half.y ()), half, yaw, refl);
-      const Eigen::Matrix3d r = Eigen::AngleAxisd (yaw, up).toRotationMatrix ();
-      for (const double sx : {-1.0, 1.0})
-        for (const double sz : {-1.0, 1.0})
-        {
-          const Eigen::Vector3d leg = at + r * Eigen::Vector3d (sx * (half.x () - 0.04), 0, sz * (half.z () - 0.04));
-          addBox (leg + up * (0.5 * (top - 2 * half.y ())), Eigen::Vector3d (0.02, 0.5 * (top - 2 * half.y ()), 0.02),
-                  yaw, refl);
-        }
-    }
-  }
-  for (int b = 0; b < boxes; ++b)
-  {
-    const Eigen::Vector3d half (rng.uniform (0.1, 0.35), rng.uniform (0.08, 0.5), rng.uniform (0.1, 0.35));
-    const double yaw = rng.uniform (0.0, M_PI);
-    const float refl = static_cast<float> (rng.uniform (0.3, 0.9));
-    Eigen::Vector3d at;
-    if (place (std::hypot (half.x (), half.z ()), at))
-      addBox (at + up * half.y (), half, yaw, refl);
-  }
-
-  const SynthScene scene = world.transformed (world_to_camera);
+  const SynthScene scene = world.transformed (frame.world_to_camera);
   renderScene (scene, render_sensor_, rng, frame);
   if (options_.colour)
   {
@@ -1556,7 +1765,7 @@ SynthGenerator::render (std::uint64_t index) const
   }
   if (options_.sensor == SynthSensor::Bonn)
     toBonnView (render_sensor_, sensor_, frame);
-  makeLabels (body.transformed (world_to_camera), sensor_, frame);
+  makeLabels (body.transformed (frame.world_to_camera), sensor_, frame);
   return frame;
 }
 

@@ -395,6 +395,72 @@ partsOfTriangles (const std::vector<Eigen::Vector3i> &triangles, const std::vect
   return result;
 }
 
+/** The per-pixel label part of each bone (HumanMesh::boneLabels). */
+std::vector<SynthPart>
+labelBones (const std::vector<HumanMesh::Bone> &bones)
+{
+  struct Subtree
+  {
+    const char *bone;
+    SynthPart left, right;  ///< for a sided bone (name + ".L" / ".R"); left for a middle one
+  };
+  // Outer subtrees first, so that the inner ones (a hand in its arm) win.
+  static const Subtree subtrees[] = {
+      {"neck01", SynthPart::Neck, SynthPart::Neck},
+      {"head", SynthPart::Head, SynthPart::Head},
+      {"upperarm01", SynthPart::LeftUpperArm, SynthPart::RightUpperArm},
+      {"lowerarm01", SynthPart::LeftForearm, SynthPart::RightForearm},
+      {"wrist", SynthPart::LeftHand, SynthPart::RightHand},
+      {"upperleg01", SynthPart::LeftThigh, SynthPart::RightThigh},
+      {"lowerleg01", SynthPart::LeftLowerLeg, SynthPart::RightLowerLeg},
+      {"foot", SynthPart::LeftFoot, SynthPart::RightFoot}};
+  std::vector<SynthPart> labels (bones.size (), SynthPart::Torso);
+  for (const char *pelvis : {"root", "spine05", "pelvis.L", "pelvis.R"})
+  {
+    const int b = boneIndex (bones, pelvis);
+    if (b >= 0)
+      labels[static_cast<std::size_t> (b)] = SynthPart::Pelvis;
+  }
+  for (const Subtree &subtree : subtrees)
+  {
+    const bool sided = subtree.left != subtree.right;
+    for (int side = 0; side < (sided ? 2 : 1); ++side)
+    {
+      const int top = boneIndex (bones, std::string (subtree.bone) + (sided ? (side == 0 ? ".L" : ".R") : ""));
+      if (top < 0)
+        continue;
+      for (std::size_t b = 0; b < bones.size (); ++b)
+        if (isInSubtree (bones, static_cast<int> (b), top))
+          labels[b] = side == 0 ? subtree.left : subtree.right;
+    }
+  }
+  return labels;
+}
+
+/** Each triangle's label: that of the bone with the largest weight over its corners. */
+std::vector<SynthPart>
+labelTriangles (const std::vector<Eigen::Vector3i> &triangles,
+                const std::vector<std::vector<HumanMesh::Influence>> &influences,
+                const std::vector<SynthPart> &bone_labels)
+{
+  std::vector<SynthPart> labels;
+  labels.reserve (triangles.size ());
+  std::map<int, double> weight;  // ordered by bone: ties go to the first
+  for (const auto &t : triangles)
+  {
+    weight.clear ();
+    for (int k = 0; k < 3; ++k)
+      for (const auto &influence : influences[static_cast<std::size_t> (t[k])])
+        weight[influence.bone] += influence.weight;
+    int best = weight.begin ()->first;
+    for (const auto &[bone, w] : weight)
+      if (w > weight[best])
+        best = bone;
+    labels.push_back (bone_labels[static_cast<std::size_t> (best)]);
+  }
+  return labels;
+}
+
 /** The vertex of a part farthest along a direction from a point. */
 int
 extremeVertex (const std::vector<Eigen::Vector3d> &vertices, const std::vector<HumanMesh::Part> &parts,
@@ -488,6 +554,8 @@ HumanMesh::load (const std::string &directory)
   mesh.triangles_ = std::move (body.triangles);
   mesh.parts_ = vertexParts (mesh.influences_, boneParts (mesh.bones_));
   mesh.triangle_parts_ = partsOfTriangles (mesh.triangles_, mesh.parts_);
+  mesh.bone_labels_ = labelBones (mesh.bones_);
+  mesh.triangle_labels_ = labelTriangles (mesh.triangles_, mesh.influences_, mesh.bone_labels_);
   mesh.tips_ = findTipVertices (mesh.vertices_, mesh.parts_, mesh.bones_, paths);
   mesh.height_ = standingHeight (mesh.vertices_, paths);
   return mesh;

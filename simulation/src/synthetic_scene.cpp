@@ -297,8 +297,11 @@ SynthPrimitive::boundingSphere (Eigen::Vector3d &c, double &r) const
 }
 
 double
-SynthPrimitive::intersect (const Eigen::Vector3d &o, const Eigen::Vector3d &d, double t_min, Eigen::Vector3d *n) const
+SynthPrimitive::intersect (const Eigen::Vector3d &o, const Eigen::Vector3d &d, double t_min, Eigen::Vector3d *n,
+                           int *triangle) const
 {
+  if (triangle)
+    *triangle = -1;
   switch (shape)
   {
     case Shape::Capsule:
@@ -422,13 +425,24 @@ SynthPrimitive::intersect (const Eigen::Vector3d &o, const Eigen::Vector3d &d, d
     case Shape::Mesh:
     {
       // The placement is rigid, so t is the same in the mesh's own frame.
-      const double t = mesh->intersect (axes.transpose () * (o - centre), axes.transpose () * d, t_min, n);
+      const double t = mesh->intersect (axes.transpose () * (o - centre), axes.transpose () * d, t_min, n, triangle);
       if (t >= 0 && n)
         *n = axes * *n;
       return t;
     }
   }
   return -1.0;
+}
+
+SynthPart
+SynthPrimitive::partAt (int triangle) const
+{
+  if (object != SynthObject::Person)
+    return SynthPart::None;
+  SynthPart p = part;
+  if (triangle_parts && triangle >= 0 && static_cast<std::size_t> (triangle) < triangle_parts->size ())
+    p = (*triangle_parts)[static_cast<std::size_t> (triangle)];
+  return p == SynthPart::None ? SynthPart::Unknown : p;
 }
 
 double
@@ -692,11 +706,15 @@ buildBody (const MotionClip &clip, int frame, const BodyParams &bp)
 
   BodyModel body;
   SynthMaterial material = SynthMaterial::Skin;  // of the primitives added next
+  SynthPart part = SynthPart::Head;              // likewise
   auto add = [&] (SynthPrimitive p) {
     p.reflectivity = refl;
     p.material = material;
+    p.part = part;
     body.primitives.push_back (p);
   };
+  // Side 0 is the subject's left.
+  auto sided = [] (int side, SynthPart left, SynthPart right) { return side == 0 ? left : right; };
   auto capsule = [&] (const Eigen::Vector3d &a, const Eigen::Vector3d &b, double r) {
     add (SynthPrimitive::capsule (a, b, r, SynthObject::Person));
   };
@@ -717,10 +735,12 @@ buildBody (const MotionClip &clip, int frame, const BodyParams &bp)
     body.tip[0] = c + hb.col (1) * semi.y ();
     body.base[0] = P (m.head);
   }
+  part = SynthPart::Neck;
   capsule (P (m.neck), P (m.head), 0.052 * girth);
   // Torso: chest, abdomen and pelvis ellipsoids, a capsule across the shoulders.
   const double td = bp.torso_depth;
   material = SynthMaterial::Top;
+  part = SynthPart::Torso;
   {
     const Eigen::Matrix3d cb = B (m.spine_mid);
     const Eigen::Vector3d c = 0.5 * (P (m.spine_mid) + P (m.neck)) + cb * Eigen::Vector3d (0, 0.01, -0.01) * s;
@@ -734,8 +754,10 @@ buildBody (const MotionClip &clip, int frame, const BodyParams &bp)
   {
     const Eigen::Matrix3d pb = B (m.root);
     const Eigen::Vector3d c = P (m.root) + pb * Eigen::Vector3d (0, -0.045, -0.01) * s;
+    part = SynthPart::Pelvis;
     ellipsoid (c, pb, Eigen::Vector3d (0.16 * girth, 0.11 * s, 0.11 * girth * td));
   }
+  part = SynthPart::Torso;
   capsule (P (m.shoulder[0]), P (m.shoulder[1]), 0.055 * girth);
 
   for (int side = 0; side < 2; ++side)
@@ -744,7 +766,9 @@ buildBody (const MotionClip &clip, int frame, const BodyParams &bp)
     const double arm = girth * bp.arm_girth;
     const Eigen::Vector3d sh = P (m.shoulder[side]), el = P (m.elbow[side]), wr = P (m.wrist[side]);
     material = SynthMaterial::Top;
+    part = sided (side, SynthPart::LeftUpperArm, SynthPart::RightUpperArm);
     capsule (sh, el, 0.047 * arm);
+    part = sided (side, SynthPart::LeftForearm, SynthPart::RightForearm);
     capsule (el, wr, 0.038 * arm);
     Eigen::Vector3d hand_dir = wr - el;
     if (m.hand_end[side] >= 0 && (P (m.hand_end[side]) - wr).norm () > 0.01 * s)
@@ -757,6 +781,7 @@ buildBody (const MotionClip &clip, int frame, const BodyParams &bp)
     body.tip_primitives[1 + side] = {static_cast<int> (body.primitives.size ())};
     body.tip_tolerance[1 + side] = hand_r + 0.03;
     material = SynthMaterial::Skin;
+    part = sided (side, SynthPart::LeftHand, SynthPart::RightHand);
     capsule (wr + hand_dir * 0.02 * s, wr + hand_dir * hand_len, hand_r);
     body.tip[1 + side] = wr + hand_dir * (hand_len + hand_r);
     body.base[1 + side] = wr;
@@ -765,14 +790,20 @@ buildBody (const MotionClip &clip, int frame, const BodyParams &bp)
     const double leg = girth * bp.leg_girth;
     const Eigen::Vector3d hp = P (m.hip[side]), kn = P (m.knee[side]), an = P (m.ankle[side]);
     material = SynthMaterial::Bottom;
+    const SynthPart thigh = sided (side, SynthPart::LeftThigh, SynthPart::RightThigh);
+    const SynthPart lower_leg = sided (side, SynthPart::LeftLowerLeg, SynthPart::RightLowerLeg);
+    part = thigh;
     capsule (hp, kn, 0.06 * leg);
+    part = lower_leg;
     capsule (kn, an, 0.045 * leg);
     {
       const double len = (kn - hp).norm ();
       const Eigen::Matrix3d lb = basisAlong (kn - hp, B (m.hip[side]).col (2));
+      part = thigh;
       ellipsoid (hp + 0.4 * (kn - hp), lb, Eigen::Vector3d (0.08 * leg, 0.55 * len, 0.08 * leg));
     }
     {
+      part = lower_leg;
       const double len = (an - kn).norm ();
       const Eigen::Matrix3d lb = basisAlong (an - kn, B (m.knee[side]).col (2));
       ellipsoid (kn + 0.35 * (an - kn) - lb.col (2) * 0.012 * s, lb, Eigen::Vector3d (0.056 * leg, 0.4 * len, 0.058 * leg));
@@ -798,6 +829,7 @@ buildBody (const MotionClip &clip, int frame, const BodyParams &bp)
                                      static_cast<int> (body.primitives.size ()) + 1};
     body.tip_tolerance[3 + side] = foot_r + 0.03;
     material = SynthMaterial::Shoes;
+    part = sided (side, SynthPart::LeftFoot, SynthPart::RightFoot);
     capsule (heel, ball, foot_r);
     capsule (ball, toe_end, toe_r);
     body.tip[3 + side] = toe_end + (toe_end - ball).normalized () * toe_r;
@@ -839,6 +871,7 @@ struct Hit
 {
   double t = -1.0;  ///< along the unit ray, -1 = none
   int primitive = -1;
+  int triangle = -1;  ///< of a mesh primitive
   double cos = 0.0;
 };
 
@@ -915,6 +948,7 @@ public:
   {
     Hit best;
     Eigen::Vector3d n, best_n = Eigen::Vector3d::Zero ();
+    int triangle = -1;
     if (planes)
       for (const int i : planes_)
       {
@@ -923,6 +957,7 @@ public:
         {
           best.t = t;
           best.primitive = i;
+          best.triangle = -1;
           best_n = n;
         }
       }
@@ -938,11 +973,12 @@ public:
         continue;
       if (best.t > 0 && along - std::sqrt (box.r2) > best.t)
         continue;
-      const double t = scene_.primitives[box.index].intersect (o, d, 1e-6, &n);
+      const double t = scene_.primitives[box.index].intersect (o, d, 1e-6, &n, &triangle);
       if (t > 0 && (best.t < 0 || t < best.t))
       {
         best.t = t;
         best.primitive = box.index;
+        best.triangle = triangle;
         best_n = n;
       }
     }
@@ -1024,6 +1060,9 @@ resetFrame (const SynthScene &scene, const SensorModel &sensor, SynthFrame &fram
   frame.ideal_z.assign (n, kNaN);
   frame.sample_min_z.assign (n, kNaN);
   frame.sample_max_z.assign (n, kNaN);
+  frame.clean_z.assign (n, kNaN);
+  frame.part_label.assign (n, 0);
+  frame.person_label.assign (n, 0);
 }
 
 /** Pass 1: the nearest hit of the ray through every pixel centre (row-major). */
@@ -1185,6 +1224,52 @@ measureStructuredLight (const Hit &centre, const Eigen::Vector3d &centre_ray, co
     return false;
   range = static_cast<float> (centre.t);
   return true;
+}
+
+/** Labels pixel i with the part and person of the surface a hit shows (nothing for the
+  * room or a miss). */
+void
+labelPixel (const SynthScene &scene, const Hit &hit, std::size_t i, SynthFrame &frame)
+{
+  if (hit.t < 0)
+    return;
+  const SynthPrimitive &p = scene.primitives[static_cast<std::size_t> (hit.primitive)];
+  const SynthPart part = p.partAt (hit.triangle);
+  if (part == SynthPart::None)
+    return;
+  frame.part_label[i] = static_cast<std::uint8_t> (part);
+  frame.person_label[i] = std::max<std::uint8_t> (1, p.person);
+}
+
+/** Time of flight: the surface a blended range shows, the sample whose range is nearest
+  * to it, if within 1 cm + 1% of the range; null for a flying pixel between surfaces. */
+const Hit *
+surfaceAtBlendedRange (const PixelSamples &samples, double range)
+{
+  const Hit *best = nullptr;
+  double best_gap = kInf;
+  for (std::size_t s = 0; s < samples.count; ++s)
+  {
+    const Hit &hit = samples.hits[s];
+    if (hit.t < 0)
+      continue;
+    const double gap = std::abs (hit.t - range);
+    if (gap < best_gap)
+    {
+      best_gap = gap;
+      best = &hit;
+    }
+  }
+  return best_gap <= 0.01 + 0.01 * range ? best : nullptr;
+}
+
+/** No label where the sensor gave no depth. */
+void
+clearLabelsWithoutDepth (SynthFrame &frame)
+{
+  for (std::size_t i = 0; i < frame.part_label.size (); ++i)
+    if (!std::isfinite (frame.cloud.points[i].z))
+      frame.part_label[i] = frame.person_label[i] = 0;
 }
 
 /** The point at range r along pixel (u, v)'s ray, as agex::depthImageToCloud places it. */
@@ -1352,20 +1437,28 @@ renderScene (const SynthScene &scene, const SensorModel &sensor, SynthRng &rng, 
       samplePixel (binner, centre, ray, u, v, w, h, std::max (1, sensor.supersample), samples);
       const PixelIntegral sum = integratePixel (scene, samples);
       recordGroundTruth (sum, centre[i], ray (u, v), i, frame);
+      // The labels are those of the surface the measurement shows.
       if (tof)
-        measureTimeOfFlight (sum, samples.hits.size (), sensor, range[i], amplitudes[i]);
-      else
-        measureStructuredLight (centre[i], samples.dirs[0], sensor, range[i]);
+      {
+        if (measureTimeOfFlight (sum, samples.hits.size (), sensor, range[i], amplitudes[i]))
+          if (const Hit *surface = surfaceAtBlendedRange (samples, range[i]))
+            labelPixel (scene, *surface, i, frame);
+      }
+      else if (measureStructuredLight (centre[i], samples.dirs[0], sensor, range[i]))
+        labelPixel (scene, centre[i], i, frame);
+      if (std::isfinite (range[i]))
+        frame.clean_z[i] = static_cast<float> (range[i] * ray (u, v).z ());
     }
 
   if (tof)
-  {
     addTimeOfFlightNoise (range, amplitudes, sensor, rng, frame);
-    return;
+  else
+  {
+    // Kinect: projector shadows, holes at depth edges, disparity quantisation.
+    const std::vector<float> z = projectorLitDepth (scene, sensor, ray, range);
+    dropEdgesAndQuantiseDisparity (z, depthEdges (frame.ideal_z, w, h), sensor, rng, frame);
   }
-  // Kinect: projector shadows, holes at depth edges, disparity quantisation.
-  const std::vector<float> z = projectorLitDepth (scene, sensor, ray, range);
-  dropEdgesAndQuantiseDisparity (z, depthEdges (frame.ideal_z, w, h), sensor, rng, frame);
+  clearLabelsWithoutDepth (frame);
 }
 
 int
@@ -1485,6 +1578,10 @@ toBonnView (const SensorModel &kinect, const SensorModel &bonn, SynthFrame &fram
   resample (frame.ideal_z);
   resample (frame.sample_min_z);
   resample (frame.sample_max_z);
+  resample (frame.clean_z);
+  resample (frame.part_label);
+  resample (frame.person_label);
+  clearLabelsWithoutDepth (frame);  // the 8-bit depth steps drop some
 }
 }  // namespace
 
@@ -1780,6 +1877,8 @@ SynthGenerator::datasetInfo () const
   info.intrinsics = sensor_.intrinsics;
   info.depth_scale = 1.0;
   info.units = "m";
+  info.part_labels = synthPartNames ();
+  info.person_labels = true;
   std::ostringstream p;
   p << "agex_synth: synthetic " << info.sensor << " frames (" << sensor_.width << "x" << sensor_.height
     << ") of " << (mesh_ ? "MakeHuman mesh bodies (" + options_.body_mesh + ")" : std::string ("capsule/ellipsoid bodies"))
@@ -1835,6 +1934,10 @@ writeSyntheticDataset (const SynthGenerator &generator, int frames, const std::s
       }
       writer.addFrame (id, frame.sequence, coloured, frame.labels);
     }
+    const int w = generator.sensor ().width, h = generator.sensor ().height;
+    // cv::Mat views of the frame's own buffers (not written to).
+    writer.addPartLabels (id, cv::Mat (h, w, CV_8UC1, const_cast<std::uint8_t *> (frame.part_label.data ())));
+    writer.addPersonLabels (id, cv::Mat (h, w, CV_8UC1, const_cast<std::uint8_t *> (frame.person_label.data ())));
     const auto t2 = clock::now ();
     stats.render_ms += std::chrono::duration<double, std::milli> (t1 - t0).count ();
     stats.write_ms += std::chrono::duration<double, std::milli> (t2 - t1).count ();

@@ -9,7 +9,8 @@
 //   kinect  640x480 structured light: disparity quantisation and noise (depth
 //           steps grow with depth^2), projector shadows and holes at depth edges,
 //           no mixed pixels
-// and head / hand / foot tip labels (agex::PartLabel) with a depth-test visibility.
+// head / hand / foot tip labels (agex::PartLabel) with a depth-test visibility, and an
+// exact per-pixel part label (agex::SynthPart) of the surface each depth pixel shows.
 //
 // Everything is a function of the seed: frame i draws from its own generator seeded
 // from (seed, i), with hand-written uniform and normal variates on std::mt19937_64's
@@ -20,6 +21,7 @@
 #include <agex/io/dataset.h>
 #include <agex/io/frame_io.h>
 #include <agex/simulation/synth_mesh.h>
+#include <agex/simulation/synth_part.h>
 
 #include <pcl/point_cloud.h>
 #include <pcl/point_types.h>
@@ -147,6 +149,14 @@ struct SynthPrimitive
   SynthObject object = SynthObject::None;
   float reflectivity = 0.7f;  ///< 0..1, for the time-of-flight amplitude
   SynthMaterial material = SynthMaterial::Default;
+  /** The body part a Person primitive is, for the per-pixel part labels (None: the
+    * label is SynthPart::Unknown, "body, part unknown"). */
+  SynthPart part = SynthPart::None;
+  /** Meshes: the part of each triangle (parallel to mesh->triangles ()), overriding
+    * `part`; null for one part per primitive. */
+  std::shared_ptr<const std::vector<SynthPart>> triangle_parts;
+  /** Which person (1, 2, ...) a Person primitive belongs to, for the person labels. */
+  std::uint8_t person = 1;
   Eigen::Vector3d a = Eigen::Vector3d::Zero (), b = Eigen::Vector3d::Zero ();
   double radius = 0.0;
   Eigen::Vector3d centre = Eigen::Vector3d::Zero ();
@@ -168,9 +178,14 @@ struct SynthPrimitive
   /** Bounding sphere; false for a plane (unbounded). */
   bool boundingSphere (Eigen::Vector3d &centre, double &radius) const;
   /** \brief Nearest ray hit at t > t_min along origin + t * direction (direction of
-    * unit length); sets the outward unit normal. Returns -1 if none. */
+    * unit length); sets the outward unit normal and, for meshes, the triangle hit (-1
+    * for other shapes). Returns -1 if none. */
   double intersect (const Eigen::Vector3d &origin, const Eigen::Vector3d &direction, double t_min,
-                    Eigen::Vector3d *normal) const;
+                    Eigen::Vector3d *normal, int *triangle = nullptr) const;
+  /** The part label of a hit on this primitive (triangle from intersect): the
+    * triangle's part for meshes with triangle_parts, else `part`; Unknown for a Person
+    * primitive without one, None for the room. */
+  SynthPart partAt (int triangle) const;
   /** Approximate signed distance of p to the surface (exact for capsules, boxes and
     * planes, first order for ellipsoids); negative inside. Meshes give the unsigned
     * distance. */
@@ -305,6 +320,16 @@ struct SynthFrame
   std::vector<int> primitive;       ///< scene primitive seen at the pixel centre, -1 if none
   std::vector<float> ideal_z;       ///< depth at the pixel centre, NaN if nothing
   std::vector<float> sample_min_z, sample_max_z;  ///< over the pixel's samples (NaN if none hit)
+  /** Depth the sensor measured before its noise, shadows and holes: sr4000, that of the
+    * amplitude-weighted blend of the samples' ranges (along the centre ray); kinect, the
+    * centre ray's. NaN where it measured nothing. */
+  std::vector<float> clean_z;
+  /** Per pixel: the SynthPart of the body surface the pixel's depth shows, 0 for the
+    * room, nothing, or no valid depth (doc/synthetic.md, "Part labels"). */
+  std::vector<std::uint8_t> part_label;
+  /** Per pixel: the person (SynthPrimitive::person, 1, 2, ...) of that surface; 0 where
+    * part_label is 0. */
+  std::vector<std::uint8_t> person_label;
   /** Colour image (row-major r, g, b), filled by shadeColour; empty for depth-only frames. */
   std::vector<std::array<std::uint8_t, 3>> colour;
   SynthScene scene;                 ///< the scene in the camera frame
@@ -314,7 +339,12 @@ struct SynthFrame
   std::string sequence;
 };
 
-/** \brief Renders a scene (camera frame) with a sensor model; draws the noise from rng. */
+/** \brief Renders a scene (camera frame) with a sensor model; draws the noise from rng.
+  * Fills the cloud, the per-pixel ground truth and the part and person labels of the
+  * surfaces the depth pixels show: kinect, the surface the pixel-centre ray hits;
+  * sr4000, the surface of the pixel's sample nearest to its (noise-free, blended) range,
+  * if within 1 cm + 1% of the range of it, else none (a flying pixel between surfaces);
+  * none wherever the depth is invalid. */
 void renderScene (const SynthScene &scene, const SensorModel &sensor, SynthRng &rng, SynthFrame &frame);
 
 /** \brief Paints a rendered frame as a colour camera would see it (frame.colour), with

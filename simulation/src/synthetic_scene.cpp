@@ -10,6 +10,8 @@
 #include <filesystem>
 #include <iomanip>
 #include <limits>
+#include <numeric>
+#include <set>
 #include <sstream>
 #include <stdexcept>
 
@@ -1470,6 +1472,15 @@ labelWindow (const SensorModel &sensor)
 void
 makeLabels (const BodyModel &body, const SensorModel &sensor, SynthFrame &frame)
 {
+  frame.labels.clear ();
+  frame.label_checks.clear ();
+  appendPersonLabels (body, sensor, 0, 1, frame);
+}
+
+void
+appendPersonLabels (const BodyModel &body, const SensorModel &sensor, int first_primitive, int person,
+                    SynthFrame &frame)
+{
   const CameraIntrinsics &k = sensor.intrinsics;
   const int w = sensor.width, h = sensor.height, win = labelWindow (sensor);
   auto project = [&] (const Eigen::Vector3d &p) {
@@ -1483,7 +1494,9 @@ makeLabels (const BodyModel &body, const SensorModel &sensor, SynthFrame &frame)
     const long u = std::lround (px.x ()), v = std::lround (px.y ());
     if (u < 0 || v < 0 || u >= w || v >= h)
       return false;
-    const std::vector<int> &own = body.tip_primitives[index];
+    std::vector<int> own = body.tip_primitives[index];
+    for (int &p : own)
+      p += first_primitive;
     for (long vv = std::max (0L, v - win); vv <= std::min<long> (h - 1, v + win); ++vv)
       for (long uu = std::max (0L, u - win); uu <= std::min<long> (w - 1, u + win); ++uu)
       {
@@ -1506,10 +1519,12 @@ makeLabels (const BodyModel &body, const SensorModel &sensor, SynthFrame &frame)
     if (!l.tip_px.allFinite () || !l.base_px.allFinite ())  // never: guards labels.csv against NaN pixels
       l.tip_px = l.base_px = Eigen::Vector2f (-1.0f, -1.0f);
     l.keyframe = true;
-    return std::make_pair (l, SynthLabelCheck{body.tip_primitives[index], body.tip_tolerance[index]});
+    l.person = person;
+    SynthLabelCheck check{body.tip_primitives[index], body.tip_tolerance[index]};
+    for (int &p : check.primitives)
+      p += first_primitive;
+    return std::make_pair (l, check);
   };
-  frame.labels.clear ();
-  frame.label_checks.clear ();
   auto push = [&] (const std::pair<PartLabel, SynthLabelCheck> &l) {
     frame.labels.push_back (l.first);
     frame.label_checks.push_back (l.second);
@@ -1585,13 +1600,32 @@ toBonnView (const SensorModel &kinect, const SensorModel &bonn, SynthFrame &fram
 }
 }  // namespace
 
-SynthGenerator::SynthGenerator (const SynthOptions &options)
-  : options_ (options), sensor_ (sensorModel (options.sensor)), render_sensor_ (renderSensorModel (options.sensor))
+namespace
 {
+/** Distances left at 0: 1.5-3.5 m for one person (aimed at), 0.8-6 m for several. */
+SynthOptions
+withDefaultDistances (SynthOptions options)
+{
+  const bool several = options.people > 1;
+  if (options.min_distance == 0.0)
+    options.min_distance = several ? 0.8 : 1.5;
+  if (options.max_distance == 0.0)
+    options.max_distance = several ? 6.0 : 3.5;
+  return options;
+}
+}  // namespace
+
+SynthGenerator::SynthGenerator (const SynthOptions &options_in)
+  : options_ (withDefaultDistances (options_in)), sensor_ (sensorModel (options_in.sensor)),
+    render_sensor_ (renderSensorModel (options_in.sensor))
+{
+  const SynthOptions &options = options_;
   if (options.motion_files.empty ())
     throw std::invalid_argument ("no motion files given");
   if (options.subjects < 1)
     throw std::invalid_argument ("the number of subjects must be at least 1");
+  if (options.people < 1 || options.people > 4)
+    throw std::invalid_argument ("the number of people per frame must be 1-4, got " + std::to_string (options.people));
   if (!(options.min_distance > 0.3) || options.max_distance < options.min_distance)
     throw std::invalid_argument ("camera distances must satisfy 0.3 < min <= max");
   if (options.max_height < options.min_height)
@@ -1796,6 +1830,155 @@ addBox (SynthRng &rng, const RoomFrame &room, double wall_behind, SynthScene &wo
     addClutterBox (world, at + Eigen::Vector3d::UnitY () * half.y (), half, yaw, refl);
 }
 
+/** A chair: a seat 0.4-0.5 m wide at 0.42-0.48 m on four legs, a backrest 0.35-0.5 m
+  * tall, turned at random. */
+void
+addChair (SynthRng &rng, const RoomFrame &room, double wall_behind, SynthScene &world)
+{
+  const Eigen::Vector3d up = Eigen::Vector3d::UnitY ();
+  const double half_w = rng.uniform (0.2, 0.25);
+  const double seat = rng.uniform (0.42, 0.48);
+  const double back = rng.uniform (0.35, 0.5);
+  const double yaw = rng.uniform (0.0, 2.0 * M_PI);
+  const float refl = static_cast<float> (rng.uniform (0.3, 0.9));
+  Eigen::Vector3d at;
+  if (!placeClutter (rng, room, wall_behind, world, std::sqrt (2.0) * half_w, at))
+    return;
+  const Eigen::Matrix3d r = Eigen::AngleAxisd (yaw, up).toRotationMatrix ();
+  const double t = 0.015;  // half the thickness of the seat and the backrest
+  addClutterBox (world, at + up * (seat - t), Eigen::Vector3d (half_w, t, half_w), yaw, refl);
+  for (const double sx : {-1.0, 1.0})
+    for (const double sz : {-1.0, 1.0})
+    {
+      const Eigen::Vector3d leg = at + r * Eigen::Vector3d (sx * (half_w - 0.02), 0, sz * (half_w - 0.02));
+      addClutterBox (world, leg + up * (0.5 * (seat - 2 * t)), Eigen::Vector3d (0.015, 0.5 * (seat - 2 * t), 0.015), yaw,
+                     refl);
+    }
+  addClutterBox (world, at + r * Eigen::Vector3d (0, 0, -(half_w - t)) + up * (seat + 0.5 * back),
+                 Eigen::Vector3d (half_w, 0.5 * back, t), yaw, refl);
+}
+
+/** A shelf facing the camera near the back wall (within 0.6 m of where the wall was
+  * drawn): 0.6-1.2 m wide, 0.3-0.4 m deep, 1.2-2 m tall; two sides, a back, a bottom, a
+  * top and 1-3 boards between. */
+void
+addShelf (SynthRng &rng, const RoomFrame &room, double wall_behind, SynthScene &world)
+{
+  const Eigen::Vector3d up = Eigen::Vector3d::UnitY ();
+  const double half_w = rng.uniform (0.3, 0.6);
+  const double half_d = rng.uniform (0.15, 0.2);
+  const double height = rng.uniform (1.2, 2.0);
+  const int boards = 1 + rng.index (3);
+  const double yaw = std::atan2 (room.ahead.x (), room.ahead.z ()) + rng.uniform (-0.3, 0.3);
+  const float refl = static_cast<float> (rng.uniform (0.3, 0.9));
+  Eigen::Vector3d at;
+  RoomFrame by_the_wall = room;
+  by_the_wall.along_min = wall_behind - 0.6;
+  if (!placeClutter (rng, by_the_wall, wall_behind, world, std::hypot (half_w, half_d), at))
+    return;
+  const Eigen::Matrix3d r = Eigen::AngleAxisd (yaw, up).toRotationMatrix ();  // local +z: away from the camera
+  const double t = 0.01;
+  for (const double sx : {-1.0, 1.0})
+    addClutterBox (world, at + r * Eigen::Vector3d (sx * (half_w - t), 0, 0) + up * (0.5 * height),
+                   Eigen::Vector3d (t, 0.5 * height, half_d), yaw, refl);
+  addClutterBox (world, at + r * Eigen::Vector3d (0, 0, half_d - t) + up * (0.5 * height),
+                 Eigen::Vector3d (half_w - 2 * t, 0.5 * height, t), yaw, refl);
+  for (int b = 0; b <= boards + 1; ++b)
+    addClutterBox (world, at + up * (t + b * (height - 2 * t) / (boards + 1)),
+                   Eigen::Vector3d (half_w - 2 * t, t, half_d - 2 * t), yaw, refl);
+}
+
+/** The clutter of a scene with several people: a desk (30%), 0-2 chairs, a shelf (30%)
+  * and 0-2 boxes. */
+void
+addGroupClutter (SynthRng &rng, const RoomFrame &room, double wall_behind, SynthScene &world)
+{
+  const bool desk = rng.chance (0.3);
+  const int chairs = rng.index (3);
+  const bool shelf = rng.chance (0.3);
+  const int boxes = rng.index (3);
+  if (desk)
+    addDesk (rng, room, wall_behind, world);
+  for (int c = 0; c < chairs; ++c)
+    addChair (rng, room, wall_behind, world);
+  if (shelf)
+    addShelf (rng, room, wall_behind, world);
+  for (int b = 0; b < boxes; ++b)
+    addBox (rng, room, wall_behind, world);
+}
+
+/** How far a body reaches horizontally from its centre (the middle of its torso). */
+double
+horizontalReach (const BodyModel &body)
+{
+  auto off = [&] (const Eigen::Vector3d &p) { return std::hypot (p.x () - body.centre.x (), p.z () - body.centre.z ()); };
+  double reach = 0.0;
+  for (const auto &p : body.primitives)
+  {
+    if (p.shape == SynthPrimitive::Shape::Capsule)
+      reach = std::max (reach, std::max (off (p.a), off (p.b)) + p.radius);
+    else if (p.shape == SynthPrimitive::Shape::Mesh)
+      for (const auto &v : p.mesh->vertices ())
+        reach = std::max (reach, off (p.centre + p.axes * v));
+    else
+    {
+      Eigen::Vector3d c;
+      double r;
+      if (p.boundingSphere (c, r))
+        reach = std::max (reach, off (c) + r);
+    }
+  }
+  return reach;
+}
+
+/** Where a placement stands on the floor plan: the camera at the origin looking along +z,
+  * its right along -x. */
+Eigen::Vector3d
+placementSpot (const SynthPersonPlacement &p)
+{
+  return Eigen::Vector3d (-p.distance * std::sin (p.bearing), 0.0, p.distance * std::cos (p.bearing));
+}
+
+/** Where to put a person whose random spots were all taken: the free spot of a grid over
+  * the ranges (25 cm by 1/14 of the bearings) nearest to the last spot drawn (p, which
+  * it replaces); false if every grid spot is taken. */
+bool
+nearestFreeGridSpot (double min_distance, double max_distance, double max_bearing,
+                     const std::function<bool (const SynthPersonPlacement &)> &free, SynthPersonPlacement &p)
+{
+  const SynthPersonPlacement last = p;
+  double best = kInf;
+  bool found = false;
+  for (double d = min_distance; d <= max_distance + 1e-9; d += 0.25)
+    for (int b = 0; b <= 14; ++b)
+    {
+      SynthPersonPlacement q = last;
+      q.distance = d;
+      q.bearing = max_bearing * (b / 7.0 - 1.0);
+      const double gap = (placementSpot (q) - placementSpot (last)).norm ();
+      if (gap < best && free (q))
+      {
+        best = gap;
+        p = q;
+        found = true;
+      }
+    }
+  return found;
+}
+
+/** The stems of the people's motion files, sorted, without repeats, joined by '+'. */
+std::string
+groupSequence (const std::vector<MotionClip> &clips, const std::vector<SynthPersonPlacement> &people)
+{
+  std::set<std::string> stems;
+  for (const auto &p : people)
+    stems.insert (clips[static_cast<std::size_t> (p.clip)].sequence);
+  std::string sequence;
+  for (const auto &stem : stems)
+    sequence += (sequence.empty () ? "" : "+") + stem;
+  return sequence;
+}
+
 /** The room of a frame: floor, walls, then a desk (a quarter of the frames) or 0-3 boxes. */
 void
 addRoom (SynthRng &rng, const RoomFrame &room, SynthScene &world)
@@ -1812,6 +1995,200 @@ addRoom (SynthRng &rng, const RoomFrame &room, SynthScene &world)
 
 SynthFrame
 SynthGenerator::render (std::uint64_t index) const
+{
+  if (options_.people == 1)
+    return renderOne (index);
+  std::vector<BodyModel> bodies;
+  const std::vector<SynthPersonPlacement> people = drawPeople (index, bodies);
+  SynthRng rng = SynthRng::forItem (options_.seed, index);
+  return renderGroup (rng, index, people, &bodies);
+}
+
+SynthFrame
+SynthGenerator::renderPeople (std::uint64_t index, const std::vector<SynthPersonPlacement> &people) const
+{
+  if (people.empty () || people.size () > 255)
+    throw std::invalid_argument ("renderPeople: 1-255 people");
+  for (const auto &p : people)
+    if (p.clip < 0 || p.clip >= static_cast<int> (clips_.size ()) || p.subject < 0 ||
+        p.subject >= static_cast<int> (subjects_.size ()) || p.clip_frame < 0 ||
+        p.clip_frame >= clips_[static_cast<std::size_t> (p.clip)].motion.frameCount () || !std::isfinite (p.distance) ||
+        !std::isfinite (p.bearing) || !std::isfinite (p.facing))
+      throw std::invalid_argument ("renderPeople: a placement's clip, clip frame or subject is out of range, or a "
+                                   "distance or angle is not finite");
+  SynthRng rng = SynthRng::forItem (options_.seed, index);
+  return renderGroup (rng, index, people, nullptr);
+}
+
+std::vector<SynthPersonPlacement>
+SynthGenerator::drawPeople (std::uint64_t index) const
+{
+  std::vector<BodyModel> bodies;
+  return drawPeople (index, bodies);
+}
+
+double
+SynthGenerator::horizontalFieldOfView () const
+{
+  return 2.0 * std::atan (0.5 * sensor_.width / sensor_.intrinsics.fx);
+}
+
+std::vector<SynthPersonPlacement>
+SynthGenerator::drawPeople (std::uint64_t index, std::vector<BodyModel> &bodies) const
+{
+  // A stream of its own, so that renderPeople (i, drawPeople (i)) is render (i).
+  SynthRng rng = SynthRng::forItem (options_.seed ^ 0x9E0913E5A11CE5EDull, index);
+  const double half_fov = 0.5 * horizontalFieldOfView ();
+  std::vector<SynthPersonPlacement> people;
+  std::vector<double> reach;
+  bodies.clear ();
+  auto clear = [&] (const SynthPersonPlacement &p, double r) {
+    for (std::size_t j = 0; j < people.size (); ++j)
+      if ((placementSpot (p) - placementSpot (people[j])).norm () < r + reach[j] + 0.1)
+        return false;
+    return true;
+  };
+  for (int k = 0; k < options_.people; ++k)
+  {
+    SynthPersonPlacement p;
+    p.clip = rng.index (static_cast<int> (clips_.size ()));
+    p.clip_frame = rng.index (clips_[static_cast<std::size_t> (p.clip)].motion.frameCount ());
+    p.subject = rng.index (static_cast<int> (subjects_.size ()));
+    p.facing = rng.uniform (0.0, 2.0 * M_PI);
+    BodyModel body = this->body (p.clip, p.clip_frame, p.subject);
+    const double r = horizontalReach (body);
+    // 40% of the people after the first stand in line with an earlier one (within 0.5 m
+    // of its line of sight), so that one hides part of the other.
+    const bool in_line = k > 0 && rng.chance (0.4);
+    const int other = k > 0 ? rng.index (k) : 0;
+    bool placed = false;
+    for (int attempt = 0; attempt < 50 && !placed; ++attempt)
+    {
+      p.distance = rng.uniform (options_.min_distance, options_.max_distance);
+      if (in_line)
+      {
+        const double lateral = rng.uniform (-0.5, 0.5);
+        p.bearing = people[static_cast<std::size_t> (other)].bearing + lateral / p.distance;
+      }
+      else
+        p.bearing = rng.uniform (-0.85 * half_fov, 0.85 * half_fov);
+      placed = clear (p, r);
+    }
+    if (!placed)  // crowded
+      placed = nearestFreeGridSpot (options_.min_distance, options_.max_distance, 0.85 * half_fov,
+                                    [&] (const SynthPersonPlacement &q) { return clear (q, r); }, p);
+    while (!placed)  // very rare: no room within the ranges; step back along the bearing
+    {
+      p.distance += 0.25;
+      placed = clear (p, r);
+    }
+    people.push_back (p);
+    reach.push_back (r);
+    bodies.push_back (std::move (body));
+  }
+  // Person 1 is the nearest.
+  std::vector<std::size_t> order (people.size ());
+  std::iota (order.begin (), order.end (), 0);
+  std::stable_sort (order.begin (), order.end (),
+                    [&] (std::size_t a, std::size_t b) { return people[a].distance < people[b].distance; });
+  std::vector<SynthPersonPlacement> sorted;
+  std::vector<BodyModel> sorted_bodies;
+  for (const std::size_t i : order)
+  {
+    sorted.push_back (people[i]);
+    sorted_bodies.push_back (std::move (bodies[i]));
+  }
+  bodies = std::move (sorted_bodies);
+  return sorted;
+}
+
+SynthFrame
+SynthGenerator::renderGroup (SynthRng &rng, std::uint64_t index, const std::vector<SynthPersonPlacement> &people,
+                             const std::vector<BodyModel> *bodies) const
+{
+  SynthFrame frame;
+  frame.people = people;
+  frame.clip = people.front ().clip;
+  frame.clip_frame = people.front ().clip_frame;
+  frame.subject = people.front ().subject;
+  frame.sequence = groupSequence (clips_, people);
+  const Eigen::Vector3d up = Eigen::Vector3d::UnitY ();
+
+  // The people on the floor plan (floor at y = 0): each body turned by its facing about
+  // the vertical through its torso, which stands at its spot.
+  std::vector<BodyModel> placed;
+  std::vector<SynthPrimitive> people_primitives;
+  std::vector<int> first_primitive;
+  double mid_height = 0.0, mean_distance = 0.0, farthest = 0.0;
+  for (std::size_t k = 0; k < people.size (); ++k)
+  {
+    const SynthPersonPlacement &p = people[k];
+    const BodyModel body = bodies ? (*bodies)[k] : this->body (p.clip, p.clip_frame, p.subject);
+    const double floor_y = floor_[static_cast<std::size_t> (p.clip)][static_cast<std::size_t> (p.subject)];
+    const Eigen::Isometry3d to_plan = Eigen::Translation3d (placementSpot (p)) * Eigen::AngleAxisd (p.facing, up) *
+                                      Eigen::Translation3d (-body.centre.x (), -floor_y, -body.centre.z ());
+    placed.push_back (body.transformed (to_plan));
+    first_primitive.push_back (static_cast<int> (people_primitives.size ()));
+    for (SynthPrimitive prim : placed.back ().primitives)
+    {
+      prim.person = static_cast<std::uint8_t> (k + 1);
+      people_primitives.push_back (std::move (prim));
+    }
+    mid_height += 0.5 * (body.lowest + body.highest) - floor_y;
+    mean_distance += p.distance;
+    farthest = std::max (farthest, placementSpot (p).z ());
+  }
+  mid_height /= static_cast<double> (people.size ());
+  mean_distance /= static_cast<double> (people.size ());
+
+  // The camera at the floor plan's origin, aimed along +z at the people's mean distance
+  // and middle height, with a jitter (pan sigma ~3 degrees, 10 cm up or down), roll and pitch.
+  const double height = rng.uniform (options_.min_height, options_.max_height);
+  const Eigen::Vector3d camera (0.0, height, 0.0);
+  Eigen::Vector3d aim (0.0, mid_height, mean_distance);
+  aim.x () += rng.normal (0.0, 0.05 * mean_distance);
+  aim.y () += rng.normal (0.0, 0.1);
+  const double roll = rng.normal (0.0, 3.0) * M_PI / 180.0, pitch = rng.normal (0.0, 2.0) * M_PI / 180.0;
+  frame.world_to_camera = worldToCamera (camera, aim, roll, pitch);
+
+  // The room: walls behind the farthest person, clutter from 0.8 m in front of the
+  // camera to the back wall, across the field of view.
+  SynthScene world;
+  world.primitives = people_primitives;
+  RoomFrame room;
+  room.ahead = aim - camera;
+  room.ahead.y () = 0.0;
+  room.ahead.normalize ();
+  room.lateral = up.cross (room.ahead);
+  room.camera = camera;
+  room.floor_y = 0.0;
+  room.anchor = room.ahead * farthest;
+  room.people = &people_primitives;
+  room.along_min = -(farthest - 0.8);
+  room.across = std::max (1.8, (farthest + 1.0) * std::tan (0.5 * horizontalFieldOfView ()) + 0.5);
+  const double wall_behind = addFloorAndWalls (rng, room, world);
+  if (options_.clutter)
+    addGroupClutter (rng, room, wall_behind, world);
+
+  const SynthScene scene = world.transformed (frame.world_to_camera);
+  renderScene (scene, render_sensor_, rng, frame);
+  if (options_.colour)
+  {
+    SynthRng colour_rng = SynthRng::forItem (options_.seed ^ 0xC0105EEDC0105EEDull, index);
+    shadeColour (render_sensor_, colour_rng, frame);
+  }
+  if (options_.sensor == SynthSensor::Bonn)
+    toBonnView (render_sensor_, sensor_, frame);
+  frame.labels.clear ();
+  frame.label_checks.clear ();
+  for (std::size_t k = 0; k < placed.size (); ++k)
+    appendPersonLabels (placed[k].transformed (frame.world_to_camera), sensor_, first_primitive[k],
+                        static_cast<int> (k + 1), frame);
+  return frame;
+}
+
+SynthFrame
+SynthGenerator::renderOne (std::uint64_t index) const
 {
   SynthRng rng = SynthRng::forItem (options_.seed, index);
   SynthFrame frame;
@@ -1850,7 +2227,10 @@ SynthGenerator::render (std::uint64_t index) const
   room.camera = camera;
   room.floor_y = floor_y;
   room.people = &body.primitives;
-  addRoom (rng, room, world);
+  if (options_.clutter)
+    addRoom (rng, room, world);
+  else
+    addFloorAndWalls (rng, room, world);
 
   const SynthScene scene = world.transformed (frame.world_to_camera);
   renderScene (scene, render_sensor_, rng, frame);
@@ -1887,7 +2267,10 @@ SynthGenerator::datasetInfo () const
     p << " " << clip.motion.path () << " (" << clip.motion.frameCount () << " frames, " << clip.scale << " m/unit"
       << (clip.scale_auto ? " auto" : "") << ")";
   p << "; seed " << options_.seed << "; camera " << options_.min_distance << "-" << options_.max_distance
-    << " m from the body, " << options_.min_height << "-" << options_.max_height << " m high; subjects:";
+    << " m from the body, " << options_.min_height << "-" << options_.max_height << " m high";
+  if (options_.people > 1)
+    p << "; " << options_.people << " people per frame (doc/synthetic.md, \"Several people\")";
+  p << "; subjects:";
   for (std::size_t s = 0; s < subjects_.size (); ++s)
     p << " #" << s << " " << subjects_[s].describe () << (s + 1 < subjects_.size () ? ";" : "");
   p << "; each frame draws (clip, clip frame, subject, camera, room, noise) from its own generator; see "

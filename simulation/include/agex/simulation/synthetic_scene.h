@@ -1,6 +1,7 @@
 #pragma once
-// Synthetic labelled depth frames (doc/synthetic.md): people posed by real motion
-// capture (BVH), a body made of capsules and ellipsoids on the skeleton, a room
+// Synthetic labelled depth frames (doc/synthetic.md): people (one, or up to four apart,
+// partly hiding each other) posed by real motion capture (BVH), a body made of capsules
+// and ellipsoids on the skeleton or the MakeHuman mesh, a room
 // (floor, back wall, optional side wall, clutter boxes or a desk), a randomly
 // placed camera, a ray-casting renderer and two sensor models:
 //   sr4000  144x176 portrait time-of-flight: 3x3 supersampling whose samples are
@@ -309,6 +310,17 @@ struct SynthLabelCheck
   double tolerance = 0.05;      ///< metres
 };
 
+/** Where one person of a scene with several (SynthOptions::people > 1) stands and
+  * what they do. The camera stands on the floor plan's origin and looks along its view
+  * direction (before the aim's jitter). */
+struct SynthPersonPlacement
+{
+  int clip = 0, clip_frame = 0, subject = 0;
+  double distance = 2.0;  ///< horizontal, camera to the middle of the torso, metres
+  double bearing = 0.0;   ///< radians from the view direction, positive to the image's right
+  double facing = 0.0;    ///< the body's turn about the vertical, radians
+};
+
 /** A rendered frame, in the camera frame (x right, y down, z forward, metres). */
 struct SynthFrame
 {
@@ -334,9 +346,11 @@ struct SynthFrame
   std::vector<std::array<std::uint8_t, 3>> colour;
   SynthScene scene;                 ///< the scene in the camera frame
   Eigen::Isometry3d world_to_camera = Eigen::Isometry3d::Identity ();
-  // What was drawn:
+  // What was drawn (for several people: those of person 1, the nearest):
   int clip = 0, clip_frame = 0, subject = 0;
   std::string sequence;
+  /** Several people: person k + 1 stands at people[k], nearest first; empty for one. */
+  std::vector<SynthPersonPlacement> people;
 };
 
 /** \brief Renders a scene (camera frame) with a sensor model; draws the noise from rng.
@@ -364,6 +378,12 @@ void shadeColour (const SensorModel &sensor, SynthRng &rng, SynthFrame &frame);
   * image's left (smaller tip u). Fills frame.labels and frame.label_checks. */
 void makeLabels (const BodyModel &body_in_camera, const SensorModel &sensor, SynthFrame &frame);
 
+/** \brief The same for one person of several: appends the five labels of a body whose
+  * primitives start at index first_primitive of frame.scene, with PartLabel::person =
+  * person (and the checks' primitives as scene indices). */
+void appendPersonLabels (const BodyModel &body_in_camera, const SensorModel &sensor, int first_primitive, int person,
+                         SynthFrame &frame);
+
 /** Half size of the label visibility window: 1 (3x3) for sr4000, 2 (5x5) for kinect. */
 int labelWindow (const SensorModel &sensor);
 
@@ -375,7 +395,12 @@ struct SynthOptions
   SynthSensor sensor = SynthSensor::Sr4000;
   std::uint64_t seed = 1;
   int subjects = 4;        ///< body shapes drawn from the seed
-  double min_distance = 1.5, max_distance = 3.5;  ///< camera to body, metres
+  /** People per frame, 1-4. One: the camera is placed around the person and aimed at
+    * them. Several: they stand at random distances and bearings in front of the camera,
+    * partly hiding each other (doc/synthetic.md, "Several people"). */
+  int people = 1;
+  /** Camera to body (each person's), metres; 0: 1.5-3.5 for one person, 0.8-6 for several. */
+  double min_distance = 0.0, max_distance = 0.0;
   double min_height = 0.8, max_height = 1.6;      ///< camera above the floor, metres
   /** A MakeHuman directory (base.obj, default.mhskel, default_weights.mhw) for mesh
     * bodies (buildMeshBody); empty: capsule and ellipsoid bodies (buildBody). */
@@ -383,6 +408,8 @@ struct SynthOptions
   /** Also paint colour frames (shadeColour; sr4000 and kinect only); the depth is the same
     * as without. */
   bool colour = false;
+  /** Desks, chairs, shelves and boxes in the room (walls and the floor always). */
+  bool clutter = true;
 };
 
 /** Draws and renders frames; frame i depends only on the options and i. */
@@ -405,10 +432,26 @@ public:
 
   /** Renders frame `index`. */
   SynthFrame render (std::uint64_t index) const;
+  /** \brief Renders frame `index` with the given people (1-255 of them, person k + 1 at
+    * people[k]) instead of drawn ones; the camera height, its aim, the room and the
+    * noise are drawn from the frame's generator as render() draws them for several people.
+    * \throws std::invalid_argument for a clip, frame or subject out of range */
+  SynthFrame renderPeople (std::uint64_t index, const std::vector<SynthPersonPlacement> &people) const;
+  /** Draws the people of frame `index` as render () does for several (sorted nearest first). */
+  std::vector<SynthPersonPlacement> drawPeople (std::uint64_t index) const;
   /** The dataset description: sensor, size, intrinsics, provenance. */
   DatasetInfo datasetInfo () const;
 
 private:
+  SynthFrame renderOne (std::uint64_t index) const;
+  /** bodies: the people's bodies as body () gives them (null: built here). */
+  SynthFrame renderGroup (SynthRng &rng, std::uint64_t index, const std::vector<SynthPersonPlacement> &people,
+                          const std::vector<BodyModel> *bodies) const;
+  /** Also returns each person's body (as body () gives it), in the placements' order. */
+  std::vector<SynthPersonPlacement> drawPeople (std::uint64_t index, std::vector<BodyModel> &bodies) const;
+  /** Horizontal field of view of the stored frames, radians. */
+  double horizontalFieldOfView () const;
+
   SynthOptions options_;
   SensorModel sensor_, render_sensor_;
   std::vector<MotionClip> clips_;

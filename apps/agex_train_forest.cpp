@@ -57,6 +57,14 @@ struct PreparedFrame
   pcl::Indices body;
   std::vector<int> classes;  ///< per body pixel: 0 head, 1 hand, 2 foot, 3 other body, -1 ignore
   bool exact = false;        ///< classes from a label image
+  pcl::PointCloud<agex::InterestPoint> agex_points;  ///< the pipeline's AGEX points (k of its flags)
+};
+
+/** Per part: labelled instances, and those the forest finds, split by whether an AGEX point
+  * lies within 10 cm of the tip (the hands AGEX cannot name are the point of the forest). */
+struct InstanceCounts
+{
+  std::array<std::array<std::size_t, 2>, 3> total{}, pixel_hit{}, mode_hit{}, centre_hit{};  ///< [part][agex point near?]
 };
 
 /** Classes of body pixels from the frame's labels (weak) or its label image (exact). */
@@ -68,6 +76,7 @@ prepareFrame (const agex::Dataset &dataset, const std::string &id, const agex::a
   const auto cloud = dataset.loadFrame (id);
   const agex::apps::PipelineResult prepared = agex::apps::runDepthPipeline (cloud, pipeline);
   out.cloud = raw_depth ? cloud : prepared.filtered;
+  out.agex_points = prepared.interest_points;
   out.body.clear ();
   out.classes.clear ();
   const fs::path label_image = fs::path (dataset.directory ()) / "labels" / (id + ".png");
@@ -409,6 +418,7 @@ main (int argc, char **argv)
     // Scoring: per-pixel confusion of the 4 parts (+ none) against the frame's classes.
     std::array<std::array<std::size_t, 5>, 4> confusion{};
     std::vector<double> ms, forest_ms, evaluated;
+    InstanceCounts instances;
     std::size_t frames = 0;
     for (const auto &spec : test_datasets)
     {
@@ -472,16 +482,49 @@ main (int argc, char **argv)
           const int got = labels[static_cast<std::size_t> (prepared.body[j])].label;
           ++confusion[truth][got < 0 ? 4 : got];
         }
+        agex::PartModeEstimation modes_estimation;
+        agex::PartModeParams mp;
+        mp.fx = static_cast<float> (intr.fx);
+        mp.fy = static_cast<float> (intr.fy);
+        modes_estimation.setParams (mp);
+        std::vector<agex::PartMode> modes;
+        modes_estimation.compute (labels, modes);
+        // Instances: a pixel hit when at least 20% of the body pixels within 10 cm of the tip
+        // carry the part's label; a mode hit when a mode of the part (confidence >= 0.3) has
+        // its tip within 10 cm of the labelled tip.
+        for (const auto &l : selection.dataset.labelsOf (id))
+        {
+          if (!l.visible || !l.tip.allFinite () || !l.keyframe)
+            continue;
+          const int part = static_cast<int> (l.part);
+          bool near_agex = false;
+          for (const auto &q : prepared.agex_points)
+            near_agex = near_agex || (q.getVector3fMap () - l.tip).norm () <= 0.10f;
+          std::size_t near = 0, same = 0;
+          for (const auto i : prepared.body)
+          {
+            const auto &q = labels[static_cast<std::size_t> (i)];
+            if (!std::isfinite (q.z) || (q.getVector3fMap () - l.tip).norm () > 0.10f)
+              continue;
+            ++near;
+            same += q.label == part ? 1 : 0;
+          }
+          bool mode_found = false, centre_found = false;
+          for (const auto &m : modes)
+          {
+            if (m.part != part || m.confidence < 0.3f)
+              continue;
+            mode_found = mode_found || (m.tip - l.tip).norm () <= 0.10f;
+            centre_found = centre_found || (m.position - l.tip).norm () <= 0.10f;
+          }
+          ++instances.total[part][near_agex];
+          instances.pixel_hit[part][near_agex] += (near > 0 && same * 5 >= near) ? 1 : 0;
+          instances.mode_hit[part][near_agex] += mode_found ? 1 : 0;
+          instances.centre_hit[part][near_agex] += centre_found ? 1 : 0;
+        }
         if (!overlay_dir.empty () &&
             (overlay_frames.empty () || std::find (overlay_frames.begin (), overlay_frames.end (), id) != overlay_frames.end ()))
         {
-          agex::PartModeEstimation modes_estimation;
-          agex::PartModeParams mp;
-          mp.fx = static_cast<float> (intr.fx);
-          mp.fy = static_cast<float> (intr.fy);
-          modes_estimation.setParams (mp);
-          std::vector<agex::PartMode> modes;
-          modes_estimation.compute (labels, modes);
           const auto frame = selection.dataset.loadFrame (id);
           agex::apps::writePng ((fs::path (overlay_dir) / (id + ".png")).string (),
                                 renderParts (*frame, labels, selection.dataset.labelsOf (id), modes,
@@ -516,6 +559,15 @@ main (int argc, char **argv)
     }
     std::cout << std::setprecision (3) << "accuracy " << (total ? static_cast<double> (correct) / total : 0.0)
               << ", mean class recall " << (recall_classes ? recall_sum / recall_classes : 0.0) << "\n";
+    std::cout << "labelled instances found (pixels: >= 20% of the body within 10 cm of the tip carry the part; "
+                 "mode tips: a part mode of confidence >= 0.3 with its tip within 10 cm), by whether an AGEX point "
+                 "(k = " << pipeline.k << ") lies within 10 cm:\n";
+    for (int p = 0; p < 3; ++p)
+      for (int a = 1; a >= 0; --a)
+        std::cout << "  " << std::setw (5) << std::left << agex::labelPartName (p) << std::right
+                  << (a ? " near an AGEX point " : " no AGEX point near ") << instances.total[p][a]
+                  << ": pixels " << instances.pixel_hit[p][a] << ", mode tips " << instances.mode_hit[p][a]
+                  << " (mode positions " << instances.centre_hit[p][a] << ")\n";
     std::cout << std::setprecision (3) << "labelling CPU ms per frame (stride " << stride << ", 1 thread): median "
               << median (ms) << ", mean " << (ms.empty () ? 0.0 : std::accumulate (ms.begin (), ms.end (), 0.0) / ms.size ())
               << ", max " << (ms.empty () ? 0.0 : *std::max_element (ms.begin (), ms.end ())) << "; the forest pass alone: median "

@@ -511,8 +511,9 @@ BodyPartForest::evaluate (const ForestDepthImage &depth, const pcl::Indices &pix
                           Evaluation &output) const
 {
   const int C = numClasses ();
-  output.num_classes = C;
-  output.probabilities.assign (pixels.size () * static_cast<std::size_t> (std::max (C, 0)), 0.f);
+  output.num_classes = options.part_probabilities ? kLabelPartCount : C;
+  output.per_part = options.part_probabilities;
+  output.probabilities.assign (pixels.size () * static_cast<std::size_t> (output.num_classes), 0.f);
   output.labels.assign (pixels.size (), -1);
   output.evaluated = 0;
   if (empty ())
@@ -599,16 +600,22 @@ BodyPartForest::evaluate (const ForestDepthImage &depth, const pcl::Indices &pix
   const std::size_t E = entry_pixel.size ();
   const std::size_t T = trees_.size ();
   const bool pcl_vote = rule_ == VoteRule::PclMajority;
-  std::vector<float> probabilities (E * C, 0.f);
+  // Output columns: the classes, or the parts they count for.
+  const int G = options.part_probabilities ? kLabelPartCount : C;
+  std::vector<int> column (C);
+  for (int c = 0; c < C; ++c)
+    column[c] = options.part_probabilities ? classPart (c) : c;
+  std::vector<float> probabilities (E * G, 0.f);
   std::vector<std::uint8_t> tree_labels (pcl_vote ? E * T : 0);
   std::vector<std::int32_t> label (E, -1);
   const float vote = 1.f / static_cast<float> (T);
 
-  // 2: the trees, kBatch pixels at a time.
+  // 2: the trees, kBatch pixels at a time; the Average vote's winner right away.
   const bool fma = haveFma () && !options.generic_kernel;
   parallelFor (E, options.threads, [&] (std::size_t b, std::size_t e) {
     int us[kBatch], vs[kBatch], leaves[kBatch];
     float sus[kBatch], svs[kBatch];
+    std::vector<float> acc (static_cast<std::size_t> (kBatch) * C);
     for (std::size_t i0 = b; i0 < e; i0 += kBatch)
     {
       const int n = static_cast<int> (std::min<std::size_t> (kBatch, e - i0));
@@ -619,6 +626,7 @@ BodyPartForest::evaluate (const ForestDepthImage &depth, const pcl::Indices &pix
         vs[j] = y0 + k / W;
         scales (Fu, Fv, img[k], sus[j], svs[j]);
       }
+      std::fill (acc.begin (), acc.begin () + static_cast<std::ptrdiff_t> (n) * C, 0.f);
       for (std::size_t t = 0; t < T; ++t)
       {
         const Tree &tree = trees_[t];
@@ -628,11 +636,10 @@ BodyPartForest::evaluate (const ForestDepthImage &depth, const pcl::Indices &pix
           descendBatch (tree, depth, us, vs, sus, svs, n, leaves);
         for (int j = 0; j < n; ++j)
         {
-          const std::size_t i = i0 + j;
           const int leaf = leaves[j];
           if (pcl_vote)
-            tree_labels[i * T + t] = tree.leaf_labels[leaf];
-          float *p = &probabilities[i * C];
+            tree_labels[(i0 + j) * T + t] = tree.leaf_labels[leaf];
+          float *p = &acc[static_cast<std::size_t> (j) * C];
           if (tree.leaf_distributions.empty ())
             p[tree.leaf_labels[leaf]] += vote;
           else
@@ -643,100 +650,112 @@ BodyPartForest::evaluate (const ForestDepthImage &depth, const pcl::Indices &pix
           }
         }
       }
+      for (int j = 0; j < n; ++j)
+      {
+        const float *p = &acc[static_cast<std::size_t> (j) * C];
+        if (!pcl_vote)
+          label[i0 + j] = static_cast<std::int32_t> (std::max_element (p, p + C) - p);  // first maximum
+        float *out = &probabilities[(i0 + j) * G];
+        for (int c = 0; c < C; ++c)
+          if (column[c] >= 0 && p[c] != 0.f)
+            out[column[c]] += p[c];
+      }
     }
   });
 
-  // 3: the vote.
+  // 3: PCL's vote.
   std::atomic<std::size_t> extra (0);
-  parallelFor (E, options.threads, [&] (std::size_t b, std::size_t e) {
-    std::vector<int> bins (C);
-    std::size_t lazy = 0;
-    for (std::size_t i = b; i < e; ++i)
-    {
-      if (!pcl_vote)
-      {
-        const float *p = &probabilities[i * C];
-        label[i] = static_cast<std::int32_t> (std::max_element (p, p + C) - p);  // first maximum
-        continue;
-      }
-      std::fill (bins.begin (), bins.end (), 0);
-      for (std::size_t t = 0; t < T; ++t)
-        ++bins[tree_labels[i * T + t]];
-      // findMaxId_testTie: -1 if another label has the maximum count.
-      int max_id = 0, max_other = -1, max_val = bins[0];
-      for (int c = 1; c < C; ++c)
-      {
-        if (bins[c] == max_val)
-          max_other = c;
-        if (bins[c] > max_val)
-        {
-          max_id = c;
-          max_other = -1;
-          max_val = bins[c];
-        }
-      }
-      if (max_other < 0)
-      {
-        label[i] = max_id;
-        continue;
-      }
-      // The 3x3 neighbourhood (clamped like the texture; the pixel itself again) of
-      // pixels less than 50 mm away in depth adds its trees' votes; findMaxId. With a
-      // stride s, the neighbours are the representatives of the 3x3 neighbouring cells.
-      const int k = entry_pixel[i];
-      const int u = x0 + k % W, v = y0 + k / W;
-      const int d = img[k];
-      for (int di = -1; di <= 1; ++di)
-        for (int dj = -1; dj <= 1; ++dj)
-        {
-          const int nu = std::clamp (u + di * s, 0, fw - 1), nv = std::clamp (v + dj * s, 0, fh - 1);
-          const bool inside = depth.contains (nu, nv);
-          std::int32_t en = -1;
-          if (inside && s == 1)
-            en = slot[static_cast<std::size_t> (nv - y0) * W + (nu - x0)];
-          else if (inside)
+  if (pcl_vote)
+    parallelFor (E, options.threads, [&] (std::size_t b, std::size_t e) {
+      // bins stays zero between pixels: only the labels voted for are touched and reset.
+      std::vector<int> bins (C, 0);
+      std::vector<int> touched;
+      std::size_t lazy = 0;
+      auto add = [&] (int l, int count) {
+        if (bins[l] == 0)
+          touched.push_back (l);
+        bins[l] += count;
+      };
+      // The most voted label, the lowest on a tie; ties counts the labels with that count.
+      auto best = [&] (int &ties) {
+        int id = -1, val = 0;
+        ties = 0;
+        for (const int l : touched)
+          if (bins[l] > val || (bins[l] == val && l < id))
           {
-            const int cu = nu / s - cx0, cv = nv / s - cy0;
-            if (cu >= 0 && cv >= 0 && cu < ncx && cv < ncy)
-              en = cell[static_cast<std::size_t> (cv) * ncx + cu];
+            if (bins[l] > val)
+              ties = 0;
+            id = l;
+            val = bins[l];
           }
-          const int dn = en >= 0 ? img[entry_pixel[en]] : depth.at (nu, nv);
-          if (std::abs (d - dn) >= 50)
-            continue;
-          if (en >= 0)
-          {
-            for (std::size_t t = 0; t < T; ++t)
-              ++bins[tree_labels[en * T + t]];
-            continue;
-          }
-          if (dn == ForestDepthImage::kBackground)
-          {
-            if (background_class_ >= 0)
-              bins[background_class_] += static_cast<int> (T);
-            continue;
-          }
-          if (dn == ForestDepthImage::kNoData || s > 1)
-            continue;  // PCL would run its trees at an infinite scale on no-data pixels
-          // A measured pixel that was not asked for (the ring around the foreground): PCL
-          // runs its trees there too.
-          float su, sv;
-          scales (Fu, Fv, static_cast<std::uint16_t> (dn), su, sv);
-          for (std::size_t t = 0; t < T; ++t)
-            ++bins[trees_[t].leaf_labels[descendTree (trees_[t], depth, nu, nv, su, sv)]];
-          ++lazy;
-        }
-      max_id = 0;
-      max_val = bins[0];
-      for (int c = 1; c < C; ++c)
-        if (bins[c] > max_val)
+        for (const int l : touched)
+          ties += bins[l] == val ? 1 : 0;
+        return id;
+      };
+      for (std::size_t i = b; i < e; ++i)
+      {
+        for (std::size_t t = 0; t < T; ++t)
+          add (tree_labels[i * T + t], 1);
+        // findMaxId_testTie: no winner if two labels share the maximum count.
+        int ties = 0;
+        int winner = best (ties);
+        if (ties > 1)
         {
-          max_id = c;
-          max_val = bins[c];
+          // The 3x3 neighbourhood (clamped like the texture; the pixel itself again) of
+          // pixels less than 50 mm away in depth adds its trees' votes; findMaxId (the lowest
+          // label with the maximum). With a stride s, the neighbours are the representatives
+          // of the 3x3 neighbouring cells.
+          const int k = entry_pixel[i];
+          const int u = x0 + k % W, v = y0 + k / W;
+          const int d = img[k];
+          for (int di = -1; di <= 1; ++di)
+            for (int dj = -1; dj <= 1; ++dj)
+            {
+              const int nu = std::clamp (u + di * s, 0, fw - 1), nv = std::clamp (v + dj * s, 0, fh - 1);
+              const bool inside = depth.contains (nu, nv);
+              std::int32_t en = -1;
+              if (inside && s == 1)
+                en = slot[static_cast<std::size_t> (nv - y0) * W + (nu - x0)];
+              else if (inside)
+              {
+                const int cu = nu / s - cx0, cv = nv / s - cy0;
+                if (cu >= 0 && cv >= 0 && cu < ncx && cv < ncy)
+                  en = cell[static_cast<std::size_t> (cv) * ncx + cu];
+              }
+              const int dn = en >= 0 ? img[entry_pixel[en]] : depth.at (nu, nv);
+              if (std::abs (d - dn) >= 50)
+                continue;
+              if (en >= 0)
+              {
+                for (std::size_t t = 0; t < T; ++t)
+                  add (tree_labels[en * T + t], 1);
+                continue;
+              }
+              if (dn == ForestDepthImage::kBackground)
+              {
+                if (background_class_ >= 0)
+                  add (background_class_, static_cast<int> (T));
+                continue;
+              }
+              if (dn == ForestDepthImage::kNoData || s > 1)
+                continue;  // PCL would run its trees at an infinite scale on no-data pixels
+              // A measured pixel that was not asked for (the ring around the foreground):
+              // PCL runs its trees there too.
+              float su, sv;
+              scales (Fu, Fv, static_cast<std::uint16_t> (dn), su, sv);
+              for (std::size_t t = 0; t < T; ++t)
+                add (trees_[t].leaf_labels[descendTree (trees_[t], depth, nu, nv, su, sv)], 1);
+              ++lazy;
+            }
+          winner = best (ties);
         }
-      label[i] = max_id;
-    }
-    extra += lazy;
-  });
+        label[i] = winner;
+        for (const int l : touched)
+          bins[l] = 0;
+        touched.clear ();
+      }
+      extra += lazy;
+    });
 
   // 4: PCL's smoothing of the labels.
   std::vector<std::int32_t> smoothed;
@@ -802,7 +821,7 @@ BodyPartForest::evaluate (const ForestDepthImage &depth, const pcl::Indices &pix
     const std::size_t e = static_cast<std::size_t> (slot[k]);
     if (options.fill == StrideFill::Unlabelled && static_cast<std::size_t> (entry_pixel[e]) != k)
       continue;
-    std::copy_n (&probabilities[e * C], C, &output.probabilities[j * C]);
+    std::copy_n (&probabilities[e * G], G, &output.probabilities[j * G]);
     output.labels[j] = final_label[e];
   }
   output.evaluated = E + extra.load ();

@@ -199,13 +199,20 @@ public:
     /** Use the portable descent even where the FMA kernel could run (for tests: both give
       * the same leaves). */
     bool generic_kernel = false;
+    /** Output the probabilities of the parts (head, hand, foot, other body: the sums of
+      * their classes' probabilities) instead of the classes': less to write for a forest of
+      * many classes such as PCL's 32. */
+    bool part_probabilities = false;
   };
 
   /** One evaluation: row i belongs to pixels[i] of the call. */
   struct Evaluation
   {
+    /** Columns of probabilities: numClasses (), or kLabelPartCount if per_part. */
     int num_classes = 0;
-    /** pixels.size () x num_classes: the pixel's class distribution (0 where unlabelled). */
+    bool per_part = false;  ///< EvaluationOptions::part_probabilities
+    /** pixels.size () x num_classes: the pixel's class (or part) distribution (0 where
+      * unlabelled). */
     std::vector<float> probabilities;
     /** The winning class of each pixel, -1 where it is not labelled (not foreground, no
       * depth, outside the image, or skipped by the stride with StrideFill::Unlabelled). */

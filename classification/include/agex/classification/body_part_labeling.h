@@ -76,7 +76,7 @@ public:
   bool compute (PointCloudOut &output);
 
   /** The forest's raw output of the last compute (), one row per index, in index order:
-    * its class distributions and winning classes (BodyPartForest::Evaluation). */
+    * the part distributions (per_part) and the winning classes (BodyPartForest::Evaluation). */
   const BodyPartForest::Evaluation &getEvaluation () const { return evaluation_; }
   /** The depth image of the last compute (). */
   const ForestDepthImage &getDepthImage () const { return depth_; }

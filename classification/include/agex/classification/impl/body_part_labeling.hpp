@@ -45,6 +45,7 @@ agex::BodyPartLabeling<PointT>::compute (PointCloudOut &output)
   BodyPartForest::EvaluationOptions options = options_;
   options.fx = fx_;
   options.fy = fy_;
+  options.part_probabilities = true;  // all the output needs
   depth_.build (*input_, *indices_, dilation_);
   if (!forest_->evaluate (depth_, *indices_, options, evaluation_))
   {
@@ -72,14 +73,11 @@ agex::BodyPartLabeling<PointT>::compute (PointCloudOut &output)
     q.x = p.x;
     q.y = p.y;
     q.z = p.z;
-    q.p_head = q.p_hand = q.p_foot = q.p_other = 0.f;
     const float *probabilities = &evaluation_.probabilities[j * static_cast<std::size_t> (C)];
-    for (int c = 0; c < C; ++c)
-    {
-      const int part = forest_->classPart (c);
-      if (part >= 0)
-        q.setProbability (part, q.probability (part) + probabilities[c]);
-    }
+    q.p_head = probabilities[kLabelHead];
+    q.p_hand = probabilities[kLabelHand];
+    q.p_foot = probabilities[kLabelFoot];
+    q.p_other = probabilities[kLabelOtherBody];
     q.label = forest_->classPart (cls);
   }
   deinitCompute ();

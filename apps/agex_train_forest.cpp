@@ -462,6 +462,7 @@ main (int argc, char **argv)
           eo.stride = stride;
           eo.fill = labeling.getStrideFill ();
           eo.pcl_smoothing = pcl_smoothing;
+          eo.part_probabilities = true;  // as the stage asks for
           agex::BodyPartForest::Evaluation ev;
           std::vector<double> forest_runs;
           for (int r = 0; r < repeats; ++r)

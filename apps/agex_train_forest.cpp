@@ -230,7 +230,7 @@ main (int argc, char **argv)
 {
   agex::apps::PipelineParams pipeline;
   std::vector<std::string> vector_flags, datasets, test_datasets;
-  std::string out, forest_path, overlay_dir, stride_fill = "copy";
+  std::string out, forest_path, overlay_dir, stride_fill = "copy", instances_csv;
   agex::BodyPartForestTrainerParams params;
   WeakLabelParams weak;
   bool keyframes = false, no_balance = false, pcl_smoothing = false, raw_depth = false;
@@ -250,6 +250,7 @@ main (int argc, char **argv)
      "score per-pixel accuracy on the keyframes of these datasets (after training, or of --forest)")
     ("overlay-dir", po::value (&overlay_dir), "write part maps (labels over depth) of the scored frames here")
     ("overlay-frames", po::value (&overlay_frames)->multitoken (), "only these frame ids get a part map")
+    ("instances-csv", po::value (&instances_csv), "scoring: one CSV row per labelled keyframe part instance")
     ("stride", po::value (&stride)->default_value (stride), "scoring: one evaluated pixel per stride x stride cell")
     ("stride-fill", po::value (&stride_fill)->default_value (stride_fill), "scoring: skipped pixels copy|unlabelled")
     ("pcl-smoothing", po::bool_switch (&pcl_smoothing), "scoring: PCL's 5x5 label smoothing after the vote")
@@ -325,6 +326,8 @@ main (int argc, char **argv)
         read.checkOutput (out);
       if (!overlay_dir.empty ())
         read.checkOutput (overlay_dir);
+      if (!instances_csv.empty ())
+        read.checkOutput (instances_csv);
     }
 
     agex::BodyPartForest::ConstPtr model;
@@ -419,6 +422,9 @@ main (int argc, char **argv)
     std::array<std::array<std::size_t, 5>, 4> confusion{};
     std::vector<double> ms, forest_ms, evaluated;
     InstanceCounts instances;
+    std::ostringstream csv;
+    csv << "frame,part,instance,agex_point_within_10cm,body_pixels_within_10cm,part_pixels_within_10cm,pixel_hit,"
+           "nearest_mode_tip_m,nearest_mode_position_m\n";
     std::size_t frames = 0;
     for (const auto &spec : test_datasets)
     {
@@ -511,13 +517,18 @@ main (int argc, char **argv)
             same += q.label == part ? 1 : 0;
           }
           bool mode_found = false, centre_found = false;
+          float nearest_tip = std::numeric_limits<float>::infinity (), nearest_position = nearest_tip;
           for (const auto &m : modes)
           {
             if (m.part != part || m.confidence < 0.3f)
               continue;
             mode_found = mode_found || (m.tip - l.tip).norm () <= 0.10f;
             centre_found = centre_found || (m.position - l.tip).norm () <= 0.10f;
+            nearest_tip = std::min (nearest_tip, (m.tip - l.tip).norm ());
+            nearest_position = std::min (nearest_position, (m.position - l.tip).norm ());
           }
+          csv << id << "," << agex::labelPartName (part) << "," << l.instance << "," << near_agex << "," << near << ","
+              << same << "," << (near > 0 && same * 5 >= near) << "," << nearest_tip << "," << nearest_position << "\n";
           ++instances.total[part][near_agex];
           instances.pixel_hit[part][near_agex] += (near > 0 && same * 5 >= near) ? 1 : 0;
           instances.mode_hit[part][near_agex] += mode_found ? 1 : 0;
@@ -535,6 +546,8 @@ main (int argc, char **argv)
         progress.step (i + 1);
       }
     }
+    if (!instances_csv.empty ())
+      agex::writeFileAtomic (instances_csv, csv.str ());
     std::size_t total = 0, correct = 0;
     double recall_sum = 0.0;
     int recall_classes = 0;

@@ -84,11 +84,11 @@ PartModeEstimation::compute (const pcl::PointCloud<BodyPartLabelPoint> &labels, 
       return false;
     }
   if (!(P.fx > 0.f) || !(P.fy > 0.f) || !std::isfinite (P.fx) || !std::isfinite (P.fy) || P.max_iterations < 1 ||
-      !(P.convergence > 0.f) || !(P.base_radius >= 0.f) || !std::isfinite (P.probability_threshold) ||
+      !(P.convergence > 0.f) || !(P.contact_radius > 0.f) || !std::isfinite (P.probability_threshold) ||
       !(P.elongation >= 1.f) || P.min_support < 1)
   {
     PCL_ERROR ("[agex::PartModeEstimation::compute] Invalid parameters (focal lengths, iterations, convergence, "
-               "base radius, threshold, elongation >= 1, min support >= 1).\n");
+               "contact radius, threshold, elongation >= 1, min support >= 1).\n");
     return false;
   }
 
@@ -204,16 +204,31 @@ PartModeEstimation::compute (const pcl::PointCloud<BodyPartLabelPoint> &labels, 
       m.confidence = m.mass / (m.mass + P.reference_area[part]);
       m.mean_probability = static_cast<float> (psum / static_cast<double> (f.samples.size ()));
 
-      // The base: other parts' pixels near the mode, else the body's centroid.
+      // The base: where the part touches the rest of the body (the labelled pixels outside the
+      // support within contact_radius of a supporting pixel: the wrist, the neck, the ankle, a
+      // hip the hand rests on), else the body's centroid.
+      Grid support_grid (samples, P.contact_radius);
+      std::vector<std::uint8_t> in_support (samples.size (), 0);
+      for (const int si : f.samples)
+        in_support[si] = 1;
       Eigen::Vector3d base_sum = Eigen::Vector3d::Zero ();
       std::size_t base_count = 0;
-      const float r2 = P.base_radius * P.base_radius;
+      const float r2 = P.contact_radius * P.contact_radius;
       for (const int i : body)
       {
+        // The rest of the body: every labelled pixel that does not support this mode (other
+        // parts, and this part's pixels of other modes).
+        if (std::binary_search (m.support.begin (), m.support.end (), i))
+          continue;
         const auto &q = labels[static_cast<std::size_t> (i)];
-        if (q.label != part && (q.getVector3fMap () - m.position).squaredNorm () <= r2)
+        const Eigen::Vector3f x = q.getVector3fMap ();
+        bool touches = false;
+        support_grid.around (x, [&] (int si) {
+          touches = touches || (in_support[si] && (samples[si].x - x).squaredNorm () <= r2);
+        });
+        if (touches)
         {
-          base_sum += q.getVector3fMap ().cast<double> ();
+          base_sum += x.cast<double> ();
           ++base_count;
         }
       }
@@ -256,6 +271,7 @@ PartModeEstimation::compute (const pcl::PointCloud<BodyPartLabelPoint> &labels, 
     }
     std::stable_sort (part_modes.begin (), part_modes.end (),
                       [] (const PartMode &a, const PartMode &b) { return a.confidence > b.confidence; });
+
     modes.insert (modes.end (), std::make_move_iterator (part_modes.begin ()), std::make_move_iterator (part_modes.end ()));
   }
   return true;

@@ -54,9 +54,9 @@ struct PartModeParams
   std::array<bool, kLabelPartCount> parts{{true, true, true, false}};
   int max_iterations = 50;
   float convergence = 1e-4f;  ///< metres a mean-shift step must fall below to stop
-  /** Pixels of other parts within this distance (metres) of a mode are the body it grows
-    * from (its base) when the direction is signed. */
-  float base_radius = 0.3f;
+  /** Labelled pixels outside the support within this distance (metres) of a supporting pixel
+    * are where the part touches the body (its base), from which the direction points away. */
+  float contact_radius = 0.04f;
   /** The principal axis is the part's direction when its standard deviation is at least
     * this many times the second one; rounder parts point from their base to the mode. */
   float elongation = 1.5f;
@@ -73,8 +73,10 @@ struct PartModeParams
   * - mean shift with a Gaussian kernel of the part's bandwidth from one seed per bandwidth-
   *   sized grid cell (the weighted mean of its pixels); seeds whose modes lie within half a
   *   bandwidth of each other are one mode; a pixel supports the mode its cell's seed reached;
-  * - direction: the base is the centroid of the labelled pixels of other parts within
-  *   base_radius of the mode (the body centroid if there are none); if the support is
+  * - direction: the base is the centroid of the labelled pixels outside the support (other
+  *   parts, other modes) within contact_radius of a supporting pixel, where the part touches
+  *   the rest of the body (the
+  *   body centroid if it touches nothing); if the support is
   *   elongated (see elongation) the direction is its weighted principal axis, signed to point
   *   away from the base, else the unit vector from the base to the mode;
   * - tip: the supporting pixel with the largest projection on the direction from the mode.

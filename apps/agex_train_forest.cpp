@@ -8,13 +8,16 @@
 
 #include <agex/apps/command_line.h>
 #include <agex/apps/dataset_selection.h>
-#include <agex/apps/depth_pipeline.h>
+#include <agex/apps/pipeline_flags.h>
 #include <agex/apps/output.h>
 #include <agex/classification/body_part_forest.h>
 #include <agex/classification/body_part_forest_trainer.h>
 #include <agex/classification/body_part_labeling.h>
 #include <agex/classification/part_modes.h>
-#include <agex/common/atomic_file.h>
+#include <agex/detection/depth_pipeline.h>
+#include <agex/io/dataset.h>
+#include <agex/io/atomic_file.h>
+#include <agex/io/frame_io.h>
 
 #include <boost/program_options.hpp>
 
@@ -26,6 +29,7 @@
 #include <array>
 #include <chrono>
 #include <filesystem>
+#include <fstream>
 #include <iomanip>
 #include <numeric>
 #include <iostream>
@@ -69,12 +73,12 @@ struct InstanceCounts
 
 /** Classes of body pixels from the frame's labels (weak) or its label image (exact). */
 bool
-prepareFrame (const agex::Dataset &dataset, const std::string &id, const agex::apps::PipelineParams &pipeline,
+prepareFrame (const agex::Dataset &dataset, const std::string &id, const agex::DepthPipelineParams &pipeline,
               const WeakLabelParams &weak, bool raw_depth, PreparedFrame &out)
 {
   out.id = id;
   const auto cloud = dataset.loadFrame (id);
-  const agex::apps::PipelineResult prepared = agex::apps::runDepthPipeline (cloud, pipeline);
+  const agex::DepthPipelineResult prepared = agex::runDepthPipeline (cloud, pipeline);
   out.cloud = raw_depth ? cloud : prepared.filtered;
   out.agex_points = prepared.interest_points;
   out.body.clear ();
@@ -82,6 +86,17 @@ prepareFrame (const agex::Dataset &dataset, const std::string &id, const agex::a
   const fs::path label_image = fs::path (dataset.directory ()) / "labels" / (id + ".png");
   if (fs::exists (label_image))
   {
+    // The header's size first: a damaged or foreign PNG is refused before it is decoded.
+    {
+      std::ifstream head_file (label_image, std::ios::binary);
+      unsigned char head[24] = {};
+      head_file.read (reinterpret_cast<char *> (head), sizeof head);
+      std::uint64_t w = 0, h = 0;
+      if (!agex::pngHeaderSize (head, static_cast<std::size_t> (head_file.gcount ()), w, h) || w != cloud->width ||
+          h != cloud->height)
+        throw std::runtime_error (label_image.string () + ": not a PNG of the frame's size (" +
+                                  std::to_string (cloud->width) + "x" + std::to_string (cloud->height) + ")");
+    }
     const cv::Mat labels = cv::imread (label_image.string (), cv::IMREAD_UNCHANGED);
     if (labels.empty () || labels.type () != CV_8UC1 || labels.cols != static_cast<int> (cloud->width) ||
         labels.rows != static_cast<int> (cloud->height))
@@ -228,7 +243,7 @@ median (std::vector<double> v)
 int
 main (int argc, char **argv)
 {
-  agex::apps::PipelineParams pipeline;
+  agex::DepthPipelineParams pipeline;
   std::vector<std::string> vector_flags, datasets, test_datasets;
   std::string out, forest_path, overlay_dir, stride_fill = "copy", instances_csv;
   agex::BodyPartForestTrainerParams params;

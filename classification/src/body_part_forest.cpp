@@ -3,7 +3,7 @@
 
 #include <agex/classification/body_part_forest.h>
 #include <agex/classification/body_part_label_point.h>
-#include <agex/common/atomic_file.h>
+#include <agex/io/atomic_file.h>
 
 #include <pcl/console/print.h>
 

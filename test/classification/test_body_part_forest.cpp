@@ -10,7 +10,7 @@
 #include <agex/classification/body_part_forest_trainer.h>
 #include <agex/classification/body_part_labeling.h>
 #include <agex/classification/part_modes.h>
-#include <agex/common/frame_io.h>
+#include <agex/io/frame_io.h>
 
 #include <pcl/io/pcd_io.h>
 

@@ -1,0 +1,279 @@
+// agex::PartModeEstimation: mean shift over part probabilities (Shotton et al. Sec. 4).
+
+#include <agex/classification/part_modes.h>
+
+#include <pcl/console/print.h>
+
+#include <Eigen/Eigenvalues>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <unordered_map>
+
+namespace agex
+{
+namespace
+{
+struct Sample
+{
+  Eigen::Vector3f x;
+  float w;    ///< p z^2
+  float p;
+  int index;  ///< into the label cloud
+};
+
+std::int64_t
+cellKey (int i, int j, int k)
+{
+  // 21 bits per axis: +-1M cells, far beyond any scene at centimetre cells.
+  auto b = [] (int v) { return static_cast<std::int64_t> (v + (1 << 20)) & ((std::int64_t (1) << 21) - 1); };
+  return (b (i) << 42) | (b (j) << 21) | b (k);
+}
+
+/** Points hashed into cubic cells of a given size. */
+class Grid
+{
+public:
+  Grid (const std::vector<Sample> &samples, float cell) : samples_ (samples), cell_ (cell)
+  {
+    for (std::size_t i = 0; i < samples.size (); ++i)
+    {
+      const Eigen::Vector3i c = coords (samples[i].x);
+      cells_[cellKey (c.x (), c.y (), c.z ())].push_back (static_cast<int> (i));
+    }
+  }
+  Eigen::Vector3i coords (const Eigen::Vector3f &x) const
+  {
+    return Eigen::Vector3i (static_cast<int> (std::floor (x.x () / cell_)), static_cast<int> (std::floor (x.y () / cell_)),
+                            static_cast<int> (std::floor (x.z () / cell_)));
+  }
+  /** Calls fn (sample index) for every sample in the 27 cells around x. */
+  template <typename Fn>
+  void around (const Eigen::Vector3f &x, Fn fn) const
+  {
+    const Eigen::Vector3i c = coords (x);
+    for (int i = -1; i <= 1; ++i)
+      for (int j = -1; j <= 1; ++j)
+        for (int k = -1; k <= 1; ++k)
+        {
+          const auto it = cells_.find (cellKey (c.x () + i, c.y () + j, c.z () + k));
+          if (it != cells_.end ())
+            for (const int s : it->second)
+              fn (s);
+        }
+  }
+
+private:
+  const std::vector<Sample> &samples_;
+  float cell_;
+  std::unordered_map<std::int64_t, std::vector<int>> cells_;
+};
+}  // namespace
+
+bool
+PartModeEstimation::compute (const pcl::PointCloud<BodyPartLabelPoint> &labels, std::vector<PartMode> &modes) const
+{
+  modes.clear ();
+  const PartModeParams &P = params_;
+  for (int c = 0; c < kLabelPartCount; ++c)
+    if (!(P.bandwidth[c] > 0.f) || !std::isfinite (P.bandwidth[c]) || !(P.reference_area[c] > 0.f) ||
+        !std::isfinite (P.reference_area[c]))
+    {
+      PCL_ERROR ("[agex::PartModeEstimation::compute] Bandwidths and reference areas must be finite and positive.\n");
+      return false;
+    }
+  if (!(P.fx > 0.f) || !(P.fy > 0.f) || !std::isfinite (P.fx) || !std::isfinite (P.fy) || P.max_iterations < 1 ||
+      !(P.convergence > 0.f) || !(P.contact_radius > 0.f) || !std::isfinite (P.probability_threshold) ||
+      !(P.elongation >= 1.f) || P.min_support < 1)
+  {
+    PCL_ERROR ("[agex::PartModeEstimation::compute] Invalid parameters (focal lengths, iterations, convergence, "
+               "contact radius, threshold, elongation >= 1, min support >= 1).\n");
+    return false;
+  }
+
+  // The body: every labelled pixel with a finite point.
+  Eigen::Vector3d body_sum = Eigen::Vector3d::Zero ();
+  std::size_t body_count = 0;
+  std::vector<int> body;
+  for (std::size_t i = 0; i < labels.size (); ++i)
+  {
+    const auto &q = labels[i];
+    if (q.label >= 0 && std::isfinite (q.x) && std::isfinite (q.y) && std::isfinite (q.z))
+    {
+      body_sum += q.getVector3fMap ().cast<double> ();
+      ++body_count;
+      body.push_back (static_cast<int> (i));
+    }
+  }
+  if (body_count == 0)
+    return true;
+  const Eigen::Vector3f body_centroid = (body_sum / static_cast<double> (body_count)).cast<float> ();
+  const float pixel_area = 1.f / (P.fx * P.fy);
+
+  for (int part = 0; part < kLabelPartCount; ++part)
+  {
+    if (!P.parts[part])
+      continue;
+    const float b = P.bandwidth[part];
+    std::vector<Sample> samples;
+    for (const int i : body)
+    {
+      const auto &q = labels[static_cast<std::size_t> (i)];
+      const float p = q.probability (part);
+      if (std::isfinite (p) && p >= P.probability_threshold && p > 0.f)
+        samples.push_back ({q.getVector3fMap (), p * q.z * q.z, p, i});
+    }
+    if (samples.empty ())
+      continue;
+    const Grid kernel_grid (samples, 3.f * b);
+    // Seeds: one per bandwidth cell, in key order (deterministic).
+    std::map<std::int64_t, std::vector<int>> seed_cells;
+    {
+      const Grid coarse (samples, b);
+      for (std::size_t i = 0; i < samples.size (); ++i)
+      {
+        const Eigen::Vector3i c = coarse.coords (samples[i].x);
+        seed_cells[cellKey (c.x (), c.y (), c.z ())].push_back (static_cast<int> (i));
+      }
+    }
+    struct Found
+    {
+      Eigen::Vector3f x;
+      std::vector<int> samples;
+    };
+    std::vector<Found> found;
+    const float inv_b2 = 1.f / (b * b), cut2 = 9.f * b * b;
+    for (const auto &cell : seed_cells)
+    {
+      Eigen::Vector3d seed = Eigen::Vector3d::Zero ();
+      double wsum = 0.0;
+      for (const int s : cell.second)
+      {
+        seed += samples[s].x.cast<double> () * samples[s].w;
+        wsum += samples[s].w;
+      }
+      Eigen::Vector3f x = (seed / wsum).cast<float> ();
+      for (int it = 0; it < P.max_iterations; ++it)
+      {
+        Eigen::Vector3d num = Eigen::Vector3d::Zero ();
+        double den = 0.0;
+        kernel_grid.around (x, [&] (int s) {
+          const float d2 = (samples[s].x - x).squaredNorm ();
+          if (d2 > cut2)
+            return;
+          const double k = samples[s].w * std::exp (-d2 * inv_b2);
+          num += samples[s].x.cast<double> () * k;
+          den += k;
+        });
+        if (!(den > 0.0))
+          break;
+        const Eigen::Vector3f next = (num / den).cast<float> ();
+        const float step = (next - x).norm ();
+        x = next;
+        if (step < P.convergence)
+          break;
+      }
+      auto same = std::find_if (found.begin (), found.end (), [&] (const Found &f) { return (f.x - x).norm () < 0.5f * b; });
+      if (same == found.end ())
+        found.push_back ({x, cell.second});
+      else
+        same->samples.insert (same->samples.end (), cell.second.begin (), cell.second.end ());
+    }
+
+    std::vector<PartMode> part_modes;
+    for (auto &f : found)
+    {
+      if (static_cast<int> (f.samples.size ()) < P.min_support)
+        continue;
+      std::sort (f.samples.begin (), f.samples.end ());
+      PartMode m;
+      m.part = part;
+      m.position = f.x;
+      double wsum = 0.0, psum = 0.0;
+      Eigen::Vector3d mean = Eigen::Vector3d::Zero ();
+      for (const int s : f.samples)
+      {
+        wsum += samples[s].w;
+        psum += samples[s].p;
+        mean += samples[s].x.cast<double> () * samples[s].w;
+        m.support.push_back (samples[s].index);
+      }
+      mean /= wsum;
+      m.mass = static_cast<float> (wsum) * pixel_area;
+      m.confidence = m.mass / (m.mass + P.reference_area[part]);
+      m.mean_probability = static_cast<float> (psum / static_cast<double> (f.samples.size ()));
+
+      // The base: where the part touches the rest of the body (the labelled pixels outside the
+      // support within contact_radius of a supporting pixel: the wrist, the neck, the ankle, a
+      // hip the hand rests on), else the body's centroid.
+      Grid support_grid (samples, P.contact_radius);
+      std::vector<std::uint8_t> in_support (samples.size (), 0);
+      for (const int si : f.samples)
+        in_support[si] = 1;
+      Eigen::Vector3d base_sum = Eigen::Vector3d::Zero ();
+      std::size_t base_count = 0;
+      const float r2 = P.contact_radius * P.contact_radius;
+      for (const int i : body)
+      {
+        // The rest of the body: every labelled pixel that does not support this mode (other
+        // parts, and this part's pixels of other modes).
+        if (std::binary_search (m.support.begin (), m.support.end (), i))
+          continue;
+        const auto &q = labels[static_cast<std::size_t> (i)];
+        const Eigen::Vector3f x = q.getVector3fMap ();
+        bool touches = false;
+        support_grid.around (x, [&] (int si) {
+          touches = touches || (in_support[si] && (samples[si].x - x).squaredNorm () <= r2);
+        });
+        if (touches)
+        {
+          base_sum += x.cast<double> ();
+          ++base_count;
+        }
+      }
+      const Eigen::Vector3f base = base_count ? (base_sum / static_cast<double> (base_count)).cast<float> () : body_centroid;
+      Eigen::Vector3f away = m.position - base;
+      Eigen::Matrix3d cov = Eigen::Matrix3d::Zero ();
+      for (const int s : f.samples)
+      {
+        const Eigen::Vector3d d = samples[s].x.cast<double> () - mean;
+        cov += samples[s].w * d * d.transpose ();
+      }
+      cov /= wsum;
+      const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig (cov);
+      const Eigen::Vector3d ev = eig.eigenvalues ();  // ascending
+      Eigen::Vector3f dir = Eigen::Vector3f::Zero ();
+      const bool elongated = ev (2) > 0.0 && ev (2) >= static_cast<double> (P.elongation * P.elongation) * ev (1);
+      if (elongated)
+      {
+        dir = eig.eigenvectors ().col (2).cast<float> ().normalized ();
+        if (dir.dot (away) < 0.f)
+          dir = -dir;
+      }
+      else if (away.norm () > 1e-6f)
+        dir = away.normalized ();
+      else if (ev (2) > 0.0)
+        dir = eig.eigenvectors ().col (2).cast<float> ().normalized ();
+      m.direction = dir;
+      float best = -std::numeric_limits<float>::infinity ();
+      for (const int s : f.samples)
+      {
+        const float t = (samples[s].x - m.position).dot (dir);
+        if (t > best)
+        {
+          best = t;
+          m.tip = samples[s].x;
+          m.tip_index = samples[s].index;
+        }
+      }
+      part_modes.push_back (std::move (m));
+    }
+    std::stable_sort (part_modes.begin (), part_modes.end (),
+                      [] (const PartMode &a, const PartMode &b) { return a.confidence > b.confidence; });
+
+    modes.insert (modes.end (), std::make_move_iterator (part_modes.begin ()), std::make_move_iterator (part_modes.end ()));
+  }
+  return true;
+}
+}  // namespace agex

@@ -1,16 +1,16 @@
 # agex_add_module(<name> SOURCES ... DEPENDS ...)
-# One shared library per module, libagex_<name>, with its public headers in
-# <module>/include. Use it as agex::<name> (the target itself is agex_<name>_lib so
-# that apps may be called agex_<name>).
+# One shared library per module, libagex_<name>.so.<major>.<minor>, with its public headers
+# in <module>/include. Use it as agex::<name> (the target itself is agex_<name>_lib so
+# that apps may be called agex_<name>). Include directories of dependencies come from
+# their targets (PCL's, OpenCV's), so no absolute path of this machine is exported.
 function(agex_add_module name)
   cmake_parse_arguments(ARG "" "" "SOURCES;DEPENDS" ${ARGN})
   set(target agex_${name}_lib)
-  add_library(${target} ${ARG_SOURCES})
+  add_library(${target} SHARED ${ARG_SOURCES})
   add_library(agex::${name} ALIAS ${target})
   target_include_directories(${target} PUBLIC
     $<BUILD_INTERFACE:${CMAKE_CURRENT_SOURCE_DIR}/include>
     $<INSTALL_INTERFACE:include>)
-  target_include_directories(${target} SYSTEM PUBLIC ${PCL_INCLUDE_DIRS})
   target_compile_definitions(${target} PUBLIC ${PCL_DEFINITIONS})
   target_link_libraries(${target} PUBLIC ${ARG_DEPENDS})
   target_compile_options(${target} PRIVATE -Wall -Wextra)

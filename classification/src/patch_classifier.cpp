@@ -127,6 +127,222 @@ readWholeFile (const std::string &path)
     throw ModelError (path + ": cannot read the model file");
   return bytes.str ();
 }
+
+/** What train () learns about its input before fitting: the positives of each class, the
+  * patch size and pitch, and the largest |cell| (the clamp). */
+struct TrainingSet
+{
+  std::vector<std::vector<const agex::DepthPatch *>> positives;
+  int size = 0;
+  float pitch = 0.f;
+  float clamp = 0.f;
+};
+
+/** \throws std::invalid_argument on any input train () cannot use (see its comment). */
+TrainingSet
+checkTrainingSet (const std::vector<agex::DepthPatch> &patches, const std::vector<int> &labels, int classes,
+                  const PatchClassifierParams &params)
+{
+  if (patches.empty ())
+    throw std::invalid_argument ("PatchClassifier::train: no patches");
+  if (patches.size () != labels.size ())
+    throw std::invalid_argument ("PatchClassifier::train: " + std::to_string (patches.size ()) + " patches but " +
+                                 std::to_string (labels.size ()) + " labels");
+  if (classes < 1)
+    throw std::invalid_argument ("PatchClassifier::train: classes must be at least 1");
+  if (params.weak_count < 1)
+    throw std::invalid_argument ("PatchClassifier::train: weak_count must be at least 1");
+  if (!(params.weight_trim_rate >= 0.0 && params.weight_trim_rate <= 1.0))
+    throw std::invalid_argument ("PatchClassifier::train: weight_trim_rate must be in [0, 1]");
+
+  TrainingSet set;
+  const int n = set.size = patches.front ().size;
+  const float pitch = set.pitch = patches.front ().metres_per_cell;
+  if (n < 1 || n > agex::DepthPatch::kMaxSize)
+    throw std::invalid_argument ("PatchClassifier::train: patch size " + std::to_string (n) + " outside 1.." +
+                                 std::to_string (agex::DepthPatch::kMaxSize));
+  set.positives.resize (static_cast<std::size_t> (classes));
+  std::vector<int> negatives (static_cast<std::size_t> (classes), 0);
+  for (std::size_t i = 0; i < patches.size (); ++i)
+  {
+    const agex::DepthPatch &p = patches[i];
+    if (p.size != n)
+      throw std::invalid_argument ("PatchClassifier::train: patch " + std::to_string (i) + " has size " +
+                                   std::to_string (p.size) + ", patch 0 has " + std::to_string (n));
+    if (!(std::fabs (p.metres_per_cell - pitch) <= 1e-4f * std::fabs (pitch)))
+      throw std::invalid_argument ("PatchClassifier::train: patch " + std::to_string (i) +
+                                   " has another cell pitch (metres_per_cell) than patch 0");
+    for (int k = 0; k < n * n; ++k)
+    {
+      if (!std::isfinite (p.patch[k]))
+        throw std::invalid_argument ("PatchClassifier::train: patch " + std::to_string (i) + " has a non-finite cell");
+      set.clamp = std::max (set.clamp, std::fabs (p.patch[k]));
+    }
+    const int label = labels[i];
+    if (label < -1 || label >= classes)
+      throw std::invalid_argument ("PatchClassifier::train: label " + std::to_string (label) + " of patch " +
+                                   std::to_string (i) + " outside -1.." + std::to_string (classes - 1));
+    for (int c = 0; c < classes; ++c)
+      if (c == label)
+        set.positives[c].push_back (&p);
+      else
+        ++negatives[c];
+  }
+  for (int c = 0; c < classes; ++c)
+  {
+    if (set.positives[c].empty ())
+      throw std::invalid_argument ("PatchClassifier::train: class " + std::to_string (c) + " has no positives");
+    if (negatives[c] == 0)
+      throw std::invalid_argument ("PatchClassifier::train: class " + std::to_string (c) +
+                                   " has no negatives (every patch is of that class)");
+  }
+  return set;
+}
+
+/** Every feature of every patch, once: N x F floats, rows in parallel (each row is
+  * independent, so the result does not depend on the threads). */
+cv::Mat
+featureRows (const FragmentDictionary &dictionary, const std::vector<agex::DepthPatch> &patches)
+{
+  cv::Mat samples (static_cast<int> (patches.size ()), static_cast<int> (dictionary.size ()), CV_32F);
+  cv::parallel_for_ (cv::Range (0, samples.rows), [&] (const cv::Range &range) {
+    for (int i = range.start; i < range.end; ++i)
+      dictionary.computeFeatures (patches[static_cast<std::size_t> (i)], samples.ptr<float> (i));
+  });
+  return samples;
+}
+
+/** The GentleBoost stumps of class c against everything else. */
+cv::Ptr<cv::ml::Boost>
+trainBooster (const cv::Mat &samples, const std::vector<int> &labels, int c, const PatchClassifierParams &params)
+{
+  // Binary responses: cv::ml::Boost maps the larger label to +1, so the margin is
+  // positive for class c.
+  cv::Mat responses (samples.rows, 1, CV_32S);
+  for (int i = 0; i < samples.rows; ++i)
+    responses.at<int> (i) = labels[static_cast<std::size_t> (i)] == c ? 1 : 0;
+  cv::Ptr<cv::ml::TrainData> data = cv::ml::TrainData::create (samples, cv::ml::ROW_SAMPLE, responses);
+  cv::Ptr<cv::ml::Boost> boost = cv::ml::Boost::create ();
+  boost->setBoostType (cv::ml::Boost::GENTLE);
+  boost->setWeakCount (params.weak_count);
+  boost->setWeightTrimRate (params.weight_trim_rate);
+  boost->setMaxDepth (1);
+  boost->setUseSurrogates (false);
+  boost->setCVFolds (0);
+  boost->setMinSampleCount (2);
+  boost->setRegressionAccuracy (0.f);
+  bool ok = false;
+  try
+  {
+    ok = boost->train (data);
+  }
+  catch (const cv::Exception &e)
+  {
+    throw std::runtime_error ("PatchClassifier::train: cv::ml::Boost failed for class " + std::to_string (c) + ": " +
+                              e.err);
+  }
+  if (!ok || !boost->isTrained ())
+    throw std::runtime_error ("PatchClassifier::train: cv::ml::Boost failed for class " + std::to_string (c));
+  return boost;
+}
+
+/** train_class (c) for every class on up to workers threads (cv::ml trains a tree on one
+  * thread, so the classes go side by side; each booster is deterministic, whatever its
+  * thread). progress is called on this thread as classes finish; the first failure (of a
+  * class or of progress) stops the rest and is rethrown. */
+std::vector<cv::Ptr<cv::ml::Boost>>
+trainBoosters (int classes, int workers, const std::function<cv::Ptr<cv::ml::Boost> (int)> &train_class,
+               const std::function<void (int, int)> &progress)
+{
+  std::vector<cv::Ptr<cv::ml::Boost>> boosters (static_cast<std::size_t> (classes));
+  if (workers == 1)
+  {
+    for (int c = 0; c < classes; ++c)
+    {
+      boosters[static_cast<std::size_t> (c)] = train_class (c);
+      if (progress)
+        progress (c + 1, classes);
+    }
+    return boosters;
+  }
+  std::mutex mutex;
+  std::condition_variable changed;
+  int next = 0, finished = 0;
+  bool stop = false;
+  std::exception_ptr error;
+  const auto work = [&] () {
+    for (;;)
+    {
+      int c;
+      {
+        std::lock_guard<std::mutex> lock (mutex);
+        if (stop || next >= classes)
+          return;
+        c = next++;
+      }
+      cv::Ptr<cv::ml::Boost> boost;
+      std::exception_ptr failure;
+      try
+      {
+        boost = train_class (c);
+      }
+      catch (...)
+      {
+        failure = std::current_exception ();
+      }
+      std::lock_guard<std::mutex> lock (mutex);
+      if (failure)
+      {
+        if (!error)
+          error = failure;
+        stop = true;
+      }
+      else
+        boosters[static_cast<std::size_t> (c)] = boost;
+      ++finished;
+      changed.notify_all ();
+    }
+  };
+  std::vector<std::thread> threads;
+  for (int t = 0; t < workers; ++t)
+    threads.emplace_back (work);
+  std::exception_ptr progress_error;
+  int reported = 0;
+  while (reported < classes && !progress_error)
+  {
+    int now;
+    {
+      std::unique_lock<std::mutex> lock (mutex);
+      changed.wait (lock, [&] { return finished > reported || stop; });
+      if (stop)
+        break;
+      now = finished;
+    }
+    while (reported < now && !progress_error)
+    {
+      ++reported;
+      if (!progress)
+        continue;
+      try
+      {
+        progress (reported, classes);
+      }
+      catch (...)
+      {
+        progress_error = std::current_exception ();
+        std::lock_guard<std::mutex> lock (mutex);
+        stop = true;
+      }
+    }
+  }
+  for (std::thread &t : threads)
+    t.join ();
+  if (error)
+    std::rethrow_exception (error);
+  if (progress_error)
+    std::rethrow_exception (progress_error);
+  return boosters;
+}
 }  // namespace
 
 std::size_t
@@ -196,204 +412,20 @@ void
 PatchClassifier::train (const std::vector<agex::DepthPatch> &patches, const std::vector<int> &labels, int classes,
                         const PatchClassifierParams &params, const std::function<void (int, int)> &progress)
 {
-  if (patches.empty ())
-    throw std::invalid_argument ("PatchClassifier::train: no patches");
-  if (patches.size () != labels.size ())
-    throw std::invalid_argument ("PatchClassifier::train: " + std::to_string (patches.size ()) + " patches but " +
-                                 std::to_string (labels.size ()) + " labels");
-  if (classes < 1)
-    throw std::invalid_argument ("PatchClassifier::train: classes must be at least 1");
-  if (params.weak_count < 1)
-    throw std::invalid_argument ("PatchClassifier::train: weak_count must be at least 1");
-  if (!(params.weight_trim_rate >= 0.0 && params.weight_trim_rate <= 1.0))
-    throw std::invalid_argument ("PatchClassifier::train: weight_trim_rate must be in [0, 1]");
-
-  const int n = patches.front ().size;
-  const float pitch = patches.front ().metres_per_cell;
-  if (n < 1 || n > agex::DepthPatch::kMaxSize)
-    throw std::invalid_argument ("PatchClassifier::train: patch size " + std::to_string (n) + " outside 1.." +
-                                 std::to_string (agex::DepthPatch::kMaxSize));
-  std::vector<std::vector<const agex::DepthPatch *>> positives (static_cast<std::size_t> (classes));
-  std::vector<int> negatives (static_cast<std::size_t> (classes), 0);
-  float clamp = 0.f;
-  for (std::size_t i = 0; i < patches.size (); ++i)
-  {
-    const agex::DepthPatch &p = patches[i];
-    if (p.size != n)
-      throw std::invalid_argument ("PatchClassifier::train: patch " + std::to_string (i) + " has size " +
-                                   std::to_string (p.size) + ", patch 0 has " + std::to_string (n));
-    if (!(std::fabs (p.metres_per_cell - pitch) <= 1e-4f * std::fabs (pitch)))
-      throw std::invalid_argument ("PatchClassifier::train: patch " + std::to_string (i) +
-                                   " has another cell pitch (metres_per_cell) than patch 0");
-    for (int k = 0; k < n * n; ++k)
-    {
-      if (!std::isfinite (p.patch[k]))
-        throw std::invalid_argument ("PatchClassifier::train: patch " + std::to_string (i) + " has a non-finite cell");
-      clamp = std::max (clamp, std::fabs (p.patch[k]));
-    }
-    const int label = labels[i];
-    if (label < -1 || label >= classes)
-      throw std::invalid_argument ("PatchClassifier::train: label " + std::to_string (label) + " of patch " +
-                                   std::to_string (i) + " outside -1.." + std::to_string (classes - 1));
-    for (int c = 0; c < classes; ++c)
-      if (c == label)
-        positives[c].push_back (&p);
-      else
-        ++negatives[c];
-  }
-  for (int c = 0; c < classes; ++c)
-  {
-    if (positives[c].empty ())
-      throw std::invalid_argument ("PatchClassifier::train: class " + std::to_string (c) + " has no positives");
-    if (negatives[c] == 0)
-      throw std::invalid_argument ("PatchClassifier::train: class " + std::to_string (c) +
-                                   " has no negatives (every patch is of that class)");
-  }
-
+  const TrainingSet set = checkTrainingSet (patches, labels, classes, params);
   FragmentDictionary dictionary;
-  dictionary.build (positives, params.dictionary);
-  const int features = static_cast<int> (dictionary.size ());
-
-  // Every feature of every patch, once: N x F floats, rows in parallel (each row is
-  // independent, so the result does not depend on the threads).
-  cv::Mat samples (static_cast<int> (patches.size ()), features, CV_32F);
-  cv::parallel_for_ (cv::Range (0, samples.rows), [&] (const cv::Range &range) {
-    for (int i = range.start; i < range.end; ++i)
-      dictionary.computeFeatures (patches[static_cast<std::size_t> (i)], samples.ptr<float> (i));
-  });
-
-  // One booster per class. cv::ml trains a tree on one thread (splits are searched
-  // variable by variable), so the classes are trained side by side on up to
-  // cv::getNumThreads () threads; each booster is deterministic, whatever its thread.
-  // progress is called on this thread as classes finish.
-  const auto trainClass = [&] (int c) {
-    // Binary responses: cv::ml::Boost maps the larger label to +1, so the margin is
-    // positive for class c.
-    cv::Mat responses (samples.rows, 1, CV_32S);
-    for (int i = 0; i < samples.rows; ++i)
-      responses.at<int> (i) = labels[static_cast<std::size_t> (i)] == c ? 1 : 0;
-    cv::Ptr<cv::ml::TrainData> data = cv::ml::TrainData::create (samples, cv::ml::ROW_SAMPLE, responses);
-    cv::Ptr<cv::ml::Boost> boost = cv::ml::Boost::create ();
-    boost->setBoostType (cv::ml::Boost::GENTLE);
-    boost->setWeakCount (params.weak_count);
-    boost->setWeightTrimRate (params.weight_trim_rate);
-    boost->setMaxDepth (1);
-    boost->setUseSurrogates (false);
-    boost->setCVFolds (0);
-    boost->setMinSampleCount (2);
-    boost->setRegressionAccuracy (0.f);
-    bool ok = false;
-    try
-    {
-      ok = boost->train (data);
-    }
-    catch (const cv::Exception &e)
-    {
-      throw std::runtime_error ("PatchClassifier::train: cv::ml::Boost failed for class " + std::to_string (c) + ": " +
-                                e.err);
-    }
-    if (!ok || !boost->isTrained ())
-      throw std::runtime_error ("PatchClassifier::train: cv::ml::Boost failed for class " + std::to_string (c));
-    return boost;
-  };
-
-  std::vector<cv::Ptr<cv::ml::Boost>> boosters (static_cast<std::size_t> (classes));
+  dictionary.build (set.positives, params.dictionary);
+  const cv::Mat samples = featureRows (dictionary, patches);
   const int workers = std::max (1, std::min (classes, cv::getNumThreads ()));
-  if (workers == 1)
-  {
-    for (int c = 0; c < classes; ++c)
-    {
-      boosters[static_cast<std::size_t> (c)] = trainClass (c);
-      if (progress)
-        progress (c + 1, classes);
-    }
-  }
-  else
-  {
-    std::mutex mutex;
-    std::condition_variable changed;
-    int next = 0, finished = 0;
-    bool stop = false;
-    std::exception_ptr error;
-    const auto work = [&] () {
-      for (;;)
-      {
-        int c;
-        {
-          std::lock_guard<std::mutex> lock (mutex);
-          if (stop || next >= classes)
-            return;
-          c = next++;
-        }
-        cv::Ptr<cv::ml::Boost> boost;
-        std::exception_ptr failure;
-        try
-        {
-          boost = trainClass (c);
-        }
-        catch (...)
-        {
-          failure = std::current_exception ();
-        }
-        std::lock_guard<std::mutex> lock (mutex);
-        if (failure)
-        {
-          if (!error)
-            error = failure;
-          stop = true;
-        }
-        else
-          boosters[static_cast<std::size_t> (c)] = boost;
-        ++finished;
-        changed.notify_all ();
-      }
-    };
-    std::vector<std::thread> threads;
-    for (int t = 0; t < workers; ++t)
-      threads.emplace_back (work);
-    std::exception_ptr progress_error;
-    int reported = 0;
-    while (reported < classes && !progress_error)
-    {
-      int now;
-      {
-        std::unique_lock<std::mutex> lock (mutex);
-        changed.wait (lock, [&] { return finished > reported || stop; });
-        if (stop)
-          break;
-        now = finished;
-      }
-      while (reported < now && !progress_error)
-      {
-        ++reported;
-        if (!progress)
-          continue;
-        try
-        {
-          progress (reported, classes);
-        }
-        catch (...)
-        {
-          progress_error = std::current_exception ();
-          std::lock_guard<std::mutex> lock (mutex);
-          stop = true;
-        }
-      }
-    }
-    for (std::thread &t : threads)
-      t.join ();
-    if (error)
-      std::rethrow_exception (error);
-    if (progress_error)
-      std::rethrow_exception (progress_error);
-  }
+  auto boosters = trainBoosters (
+      classes, workers, [&] (int c) { return trainBooster (samples, labels, c, params); }, progress);
 
   PatchClassifier trained;
   trained.dictionary_ = std::move (dictionary);
   trained.boosters_ = std::move (boosters);
-  trained.geometry_.size = n;
-  trained.geometry_.extent = static_cast<float> (n) * pitch;
-  trained.geometry_.clamp = clamp;
+  trained.geometry_.size = set.size;
+  trained.geometry_.extent = static_cast<float> (set.size) * set.pitch;
+  trained.geometry_.clamp = set.clamp;
   trained.params_ = params;
   try
   {

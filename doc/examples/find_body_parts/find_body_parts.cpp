@@ -1,6 +1,8 @@
 // The program of doc/tutorial.md: heads, hands and feet in one depth frame, built from
-// agex stages the way a PCL user composes PCL stages. It is built against an installed
-// agex by the test suite (test/consumer), so the tutorial's code cannot rot.
+// agex stages the way a PCL user composes PCL stages, then with agex::BodyPartDetector, the
+// whole detector in one class. It is built against an installed agex by the test suite
+// (test/consumer), which also checks that its detections are agex_detect's, so the
+// tutorial's code cannot rot.
 //
 //   find_body_parts FRAME MODEL [PICTURES_DIR]
 //
@@ -9,22 +11,19 @@
 // there (the tutorial's pictures).
 
 #include <agex/classification/patch_classifier.h>
+#include <agex/detection/body_part_detector.h>
 #include <agex/io/dataset.h>
 #include <agex/io/frame_io.h>
 #include <agex/features/depth_patch_estimation.h>
 #include <agex/filters/depth_median_filter.h>
+#include <agex/filters/floor_removal.h>
 #include <agex/filters/mixed_pixel_filter.h>
 #include <agex/filters/spur_filter.h>
 #include <agex/filters/surface_segmentation.h>
 #include <agex/keypoints/agex_keypoint.h>
 
-#include <pcl/ModelCoefficients.h>
 #include <pcl/common/io.h>
 #include <pcl/filters/crop_box.h>
-#include <pcl/filters/filter.h>
-#include <pcl/sample_consensus/method_types.h>
-#include <pcl/sample_consensus/model_types.h>
-#include <pcl/segmentation/sac_segmentation.h>
 
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -125,37 +124,21 @@ main (int argc, char **argv)
     median.filter (*smoothed);
     save (pictures, "step2_filtered.png", depthPicture (*smoothed));
 
-    // Step 3: take the floor away (a plane roughly perpendicular to the camera's up
-    // axis, found by RANSAC, and everything below it), erode thin spurs at the edges,
-    // then split what is left into connected surface meshes.
-    pcl::Indices finite;
-    pcl::removeNaNFromPointCloud (*smoothed, finite);
-    pcl::SACSegmentation<pcl::PointXYZ> sac;
-    sac.setInputCloud (smoothed);
-    sac.setIndices (pcl::make_shared<pcl::Indices> (finite));
-    sac.setModelType (pcl::SACMODEL_PERPENDICULAR_PLANE);
-    sac.setMethodType (pcl::SAC_RANSAC);
-    sac.setAxis (Eigen::Vector3f (0.f, -1.f, 0.f));  // camera y points down
-    sac.setEpsAngle (25.0 * M_PI / 180.0);
-    sac.setDistanceThreshold (0.04);
-    sac.setMaxIterations (1000);
-    pcl::PointIndices floor;
-    pcl::ModelCoefficients plane;
-    sac.segment (floor, plane);
-    if (plane.values.size () == 4)
-    {
-      Eigen::Vector4f p (plane.values[0], plane.values[1], plane.values[2], plane.values[3]);
-      p /= p.head<3> ().norm ();
-      if (p[1] > 0.f)
-        p = -p;  // normal pointing up: positive distance above the floor
-      for (auto &point : smoothed->points)
-        if (p.head<3> ().dot (point.getVector3fMap ()) + p[3] < 0.04f)
-          point.x = point.y = point.z = std::numeric_limits<float>::quiet_NaN ();
-    }
+    // Step 3: take the floor away (the lowest plane roughly perpendicular to the camera's up
+    // axis, found by RANSAC, and everything below it), erode thin spurs at the edges, then
+    // split what is left into connected surface meshes.
+    Cloud::Ptr standing (new Cloud);
+    agex::FloorRemoval<pcl::PointXYZ> floor;
+    floor.setInputCloud (smoothed);
+    floor.setUpAxis (Eigen::Vector3f (0.f, -1.f, 0.f));  // camera y points down
+    floor.setMaxTilt (25.f);                            // degrees
+    floor.setDistanceThreshold (0.04f);                 // metres
+    floor.setKeepOrganized (true);
+    floor.filter (*standing);
 
     Cloud::Ptr body (new Cloud);
     agex::SpurFilter<pcl::PointXYZ> spurs;
-    spurs.setInputCloud (smoothed);
+    spurs.setInputCloud (standing);
     spurs.setIterations (9);  // ~3.5 cm at 2 m: a Kinect pixel there is ~4 mm wide
     spurs.setMinConnected (6);
     spurs.setDeltaConnected (0.03f);
@@ -168,7 +151,7 @@ main (int argc, char **argv)
     segmentation.setDeltaConnected (0.03f);  // neighbours closer than 3 cm are connected
     segmentation.setMinMeshSize (body->size () / 1000);
     segmentation.segment (meshes);
-    std::printf ("floor: %zu points, meshes: %zu\n", floor.indices.size (), meshes.size ());
+    std::printf ("floor found: %s, meshes: %zu\n", floor.getFloorFound () ? "yes" : "no", meshes.size ());
     cv::Mat mesh_picture = depthPicture (*body);
     for (std::size_t m = 0; m < meshes.size (); ++m)
       for (const auto i : meshes[m].indices)
@@ -236,7 +219,18 @@ main (int argc, char **argv)
                      cv::Scalar (0, 0, 255));
     }
     save (pictures, "step6_parts.png", parts_picture);
-    return points.empty () ? 1 : 0;
+
+    // Step 7: all of the above in one class, with the settings stored in the model (the
+    // spur depth scaled to the frame's resolution, the desk-top check of the floor, ...) and
+    // several detections of one part within the suppression radius reduced to the best.
+    auto detector = agex::BodyPartDetector<pcl::PointXYZ>::fromModel (argv[2]);
+    detector->setInputCloud (cloud);
+    std::vector<agex::BodyPartDetection> detections;
+    detector->compute (detections);
+    for (const auto &d : detections)
+      std::printf ("detection: %s at pixel (%d, %d) confidence %.6f\n", agex::bodyPartName (d.part), d.u, d.v,
+                   d.confidence);
+    return detections.empty () ? 1 : 0;
   }
   catch (const std::exception &e)
   {

@@ -12,15 +12,13 @@ namespace agex
   *
   * Why not pcl::MedianFilter: PCL 1.13 builds a std::vector for every pixel (an
   * allocation and a free per point) and runs std::nth_element on it, which made the 3x3
-  * median the second most expensive stage of the detector (0.78 of 5.3 ms per 144x176
-  * Bonn frame). This class reads depth from one contiguous array and gathers each window
-  * into a fixed scratch buffer; a 3x3 window away from the border, the pipeline's case,
-  * goes through a branch-free median-of-9 network instead of std::nth_element. Measured
-  * on the same frames: 0.20 ms instead of 0.78, and 2.4 instead of 6.3 ms at
-  * 640x480 (doc/benchmarks.md).
+  * median one of the most expensive stages of the detector. This class reads depth from
+  * one contiguous array and gathers each window into a fixed scratch buffer; a 3x3 window
+  * away from the border, the pipeline's case, goes through a branch-free median-of-9
+  * network instead of std::nth_element (doc/benchmarks.md has the timings).
   *
   * Semantics are pcl::MedianFilter's, so that with setKeepOnViewingRay (false) the
-  * output is the same cloud bit for bit (test/test_depth_median_filter.cpp checks it):
+  * output is the same cloud bit for bit (test/filters/test_depth_median_filter.cpp checks it):
   *   - the output is a copy of the input (all fields) in which each finite point
   *     (pcl::isFinite: x, y and z finite) gets a new z; invalid points stay as they are;
   *   - the window is the (2 * (size / 2) + 1)^2 pixels around the point (so an even

@@ -54,8 +54,13 @@ main (int argc, char **argv)
     ("bvh-scale", po::value (&scale)->default_value (scale),
      "metres per BVH unit, or auto (by rest-pose height: metres, CMU units x0.056444, cm, mm)")
     ("subjects", po::value (&options.subjects)->default_value (options.subjects), "body shapes drawn from the seed")
-    ("min-distance", po::value (&options.min_distance)->default_value (options.min_distance, "1.5"), "camera to body, metres")
-    ("max-distance", po::value (&options.max_distance)->default_value (options.max_distance, "3.5"), "camera to body, metres")
+    ("people", po::value (&options.people)->default_value (options.people),
+     "people per frame, 1-4; several stand at random distances and bearings in front of the camera, partly hiding "
+     "each other")
+    ("min-distance", po::value (&options.min_distance)->default_value (options.min_distance, "1.5; 0.8 with --people 2-4"),
+     "camera to body (each person's), metres")
+    ("max-distance", po::value (&options.max_distance)->default_value (options.max_distance, "3.5; 6 with --people 2-4"),
+     "camera to body (each person's), metres")
     ("min-height", po::value (&options.min_height)->default_value (options.min_height, "0.8"), "camera above the floor, metres")
     ("max-height", po::value (&options.max_height)->default_value (options.max_height, "1.6"), "camera above the floor, metres")
     ("body-mesh", po::value (&options.body_mesh),
@@ -76,6 +81,8 @@ main (int argc, char **argv)
       throw std::runtime_error ("--frames must be at least 1");
     if (output.empty ())
       throw std::runtime_error ("no --output directory given");
+    if (options.people < 1 || options.people > 4)
+      throw std::runtime_error ("--people must be 1-4, got " + std::to_string (options.people));
     if (!agex::parseSynthSensor (sensor, options.sensor))
       throw std::runtime_error ("unknown --sensor '" + sensor + "' (expected sr4000, kinect or bonn)");
     options.bvh_scale = parseBvhScale (scale);

@@ -3,6 +3,8 @@
 
 #include <pcl/io/pcd_io.h>
 
+#include <opencv2/imgcodecs.hpp>
+
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
@@ -30,6 +32,10 @@ constexpr const char *kFormat = "agex-dataset";
 constexpr int kVersion = 1;
 constexpr const char *kLabelsHeader =
     "frame,part,instance,tip_x,tip_y,tip_z,base_x,base_y,base_z,tip_u,tip_v,base_u,base_v,visible,keyframe";
+/** The optional last column: which person of the frame a row labels (1 without it). */
+constexpr const char *kPersonColumn = "person";
+constexpr const char *kPartLabelFolder = "labels";
+constexpr const char *kPersonFolder = "persons";
 
 std::vector<std::string>
 splitCsv (const std::string &line)
@@ -174,6 +180,56 @@ field (const nlohmann::json &doc, const char *name, const std::string &path)
     throw DatasetError (path + ": field '" + name + "' has the wrong type");
   }
 }
+/** dataset.json's "part_labels": {"1": "head", ...}, ids 1-255 with non-empty names. */
+std::map<int, std::string>
+parsePartLabels (const nlohmann::json &doc, const std::string &path)
+{
+  std::map<int, std::string> names;
+  if (!doc.contains ("part_labels"))
+    return names;
+  const nlohmann::json &map = doc.at ("part_labels");
+  if (!map.is_object () || map.empty ())
+    throw DatasetError (path + ": 'part_labels' must be an object of part ids and names, e.g. {\"1\": \"head\"}");
+  for (const auto &[key, value] : map.items ())
+  {
+    int id = 0;
+    if (!parseInt (key, id) || id < 1 || id > 255 || std::to_string (id) != key)
+      throw DatasetError (path + ": 'part_labels' id '" + key + "' is not an integer 1-255 (0 is not a body)");
+    if (!value.is_string () || value.get<std::string> ().empty () || value.get<std::string> ().size () > 64)
+      throw DatasetError (path + ": 'part_labels' " + key + " must be a name of 1-64 characters");
+    names[id] = value.get<std::string> ();
+  }
+  return names;
+}
+
+/** An 8-bit single-channel label image of a frame: its size checked from the PNG header
+  * before decoding, then its type. */
+cv::Mat
+loadLabelImage (const std::string &path, int width, int height)
+{
+  std::error_code ec;
+  if (!fs::is_regular_file (path, ec))
+    throw DatasetError (path + ": missing (dataset.json says every frame has one)");
+  unsigned char head[24] = {};
+  std::ifstream in (path, std::ios::binary);
+  std::uint64_t w = 0, h = 0;
+  if (!in.read (reinterpret_cast<char *> (head), sizeof (head)) || !pngHeaderSize (head, sizeof (head), w, h))
+    throw DatasetError (path + ": not a PNG image");
+  const std::string expected = std::to_string (width) + "x" + std::to_string (height);
+  if (w != static_cast<std::uint64_t> (width) || h != static_cast<std::uint64_t> (height))
+    throw DatasetError (path + ": is " + std::to_string (w) + "x" + std::to_string (h) + ", the dataset's frames are " +
+                        expected);
+  const cv::Mat image = cv::imread (path, cv::IMREAD_UNCHANGED);
+  if (image.empty ())
+    throw DatasetError (path + ": cannot decode the PNG (truncated or damaged)");
+  if (image.type () != CV_8UC1)
+    throw DatasetError (path + ": is a " + std::to_string (image.channels ()) + "-channel " +
+                        std::to_string (8 * image.elemSize1 ()) + "-bit image; label images are 8-bit, one channel");
+  if (image.cols != width || image.rows != height)
+    throw DatasetError (path + ": is " + std::to_string (image.cols) + "x" + std::to_string (image.rows) +
+                        ", the dataset's frames are " + expected);
+  return image;
+}
 }  // namespace
 
 std::vector<PartLabel>
@@ -190,11 +246,15 @@ readLabelsCsv (const std::string &path)
     throw DatasetError (path + ":1: empty file, expected the header '" + std::string (kLabelsHeader) + "'");
   if (!line.empty () && line.back () == '\r')
     line.pop_back ();
-  if (line != kLabelsHeader)
-    throw DatasetError (path + ":1: unexpected header, expected '" + std::string (kLabelsHeader) + "'");
+  const std::string with_person = std::string (kLabelsHeader) + "," + kPersonColumn;
+  if (line != kLabelsHeader && line != with_person)
+    throw DatasetError (path + ":1: unexpected header, expected '" + std::string (kLabelsHeader) + "', or it and ',"
+                        + kPersonColumn + "' for several people per frame");
+  const bool has_person = line == with_person;
+  const std::size_t columns = has_person ? 16 : 15;
 
   std::vector<PartLabel> labels;
-  std::set<std::tuple<std::string, int, int>> seen;
+  std::set<std::tuple<std::string, int, int, int>> seen;
   for (int number = 2; std::getline (in, line); ++number)
   {
     if (!line.empty () && line.back () == '\r')
@@ -203,8 +263,9 @@ readLabelsCsv (const std::string &path)
       continue;
     const std::string where = path + ":" + std::to_string (number) + ": ";
     const std::vector<std::string> cells = splitCsv (line);
-    if (cells.size () != 15)
-      throw DatasetError (where + "expected 15 comma-separated fields, found " + std::to_string (cells.size ()));
+    if (cells.size () != columns)
+      throw DatasetError (where + "expected " + std::to_string (columns) + " comma-separated fields, found " +
+                          std::to_string (cells.size ()));
     PartLabel label;
     label.frame = cells[0];
     if (!validId (label.frame))
@@ -233,8 +294,11 @@ readLabelsCsv (const std::string &path)
     if (label.visible && !label.tip.allFinite ())
       throw DatasetError (where + "visible is 1 but the tip is not a number (" + cells[3] + "," + cells[4] + "," +
                           cells[5] + "); a visible label needs its 3D tip (or set visible to 0)");
-    if (!seen.emplace (label.frame, static_cast<int> (label.part), label.instance).second)
-      throw DatasetError (where + "duplicate label for frame " + label.frame + ", " + cells[1] + " " + cells[2]);
+    if (has_person && (!parseInt (cells[15], label.person) || label.person < 1 || label.person > 255))
+      throw DatasetError (where + "person must be an integer 1-255, got '" + cells[15] + "'");
+    if (!seen.emplace (label.frame, label.person, static_cast<int> (label.part), label.instance).second)
+      throw DatasetError (where + "duplicate label for frame " + label.frame + ", " + cells[1] + " " + cells[2] +
+                          (has_person ? ", person " + cells[15] : std::string ()));
     labels.push_back (label);
   }
   return labels;
@@ -243,8 +307,12 @@ readLabelsCsv (const std::string &path)
 std::string
 formatLabelsCsv (const std::vector<PartLabel> &labels)
 {
+  // The person column only where some frame has another person than the first, so that
+  // single-person datasets keep the layout earlier readers know.
+  const bool has_person =
+      std::any_of (labels.begin (), labels.end (), [] (const PartLabel &l) { return l.person != 1; });
   std::ostringstream out;
-  out << kLabelsHeader << "\n";
+  out << kLabelsHeader << (has_person ? std::string (",") + kPersonColumn : std::string ()) << "\n";
   for (const auto &l : labels)
   {
     out << l.frame << "," << bodyPartName (l.part) << "," << l.instance;
@@ -253,7 +321,10 @@ formatLabelsCsv (const std::vector<PartLabel> &labels)
     for (int i = 0; i < 3; ++i)
       out << "," << formatFloat (l.base[i]);
     out << "," << formatFloat (l.tip_px[0]) << "," << formatFloat (l.tip_px[1]) << "," << formatFloat (l.base_px[0])
-        << "," << formatFloat (l.base_px[1]) << "," << (l.visible ? 1 : 0) << "," << (l.keyframe ? 1 : 0) << "\n";
+        << "," << formatFloat (l.base_px[1]) << "," << (l.visible ? 1 : 0) << "," << (l.keyframe ? 1 : 0);
+    if (has_person)
+      out << "," << l.person;
+    out << "\n";
   }
   return out.str ();
 }
@@ -309,6 +380,9 @@ Dataset::read (const std::string &directory)
   if (info.units != "m")
     throw DatasetError (json_path + ": units must be \"m\" (clouds are stored in metres)");
   info.provenance = doc.value ("provenance", std::string ());
+  info.part_labels = parsePartLabels (doc, json_path);
+  if (doc.contains ("person_labels"))
+    info.person_labels = field<bool> (doc, "person_labels", json_path);
 
   const auto frames = field<nlohmann::json> (doc, "frames", json_path);
   if (!frames.is_array ())
@@ -325,6 +399,12 @@ Dataset::read (const std::string &directory)
       throw DatasetError (json_path + ": frame id '" + frame.id + "' listed twice");
     if (!fs::is_regular_file (ds.framePath (frame.id), ec))
       throw DatasetError (ds.framePath (frame.id) + ": listed in dataset.json but missing");
+    if (ds.hasPartLabels () && !fs::is_regular_file (ds.partLabelPath (frame.id), ec))
+      throw DatasetError (ds.partLabelPath (frame.id) + ": missing (dataset.json lists part_labels, so every frame "
+                                                        "has a part-label image)");
+    if (ds.hasPersonLabels () && !fs::is_regular_file (ds.personLabelPath (frame.id), ec))
+      throw DatasetError (ds.personLabelPath (frame.id) + ": missing (dataset.json says person_labels, so every "
+                                                          "frame has a person image)");
     ds.frames_.push_back (frame);
   }
 
@@ -365,6 +445,45 @@ Dataset::framePath (const std::string &frame_id) const
   return (fs::path (directory_) / "frames" / (frame_id + ".pcd")).string ();
 }
 
+std::string
+Dataset::partLabelPath (const std::string &frame_id) const
+{
+  return (fs::path (directory_) / kPartLabelFolder / (frame_id + ".png")).string ();
+}
+
+std::string
+Dataset::personLabelPath (const std::string &frame_id) const
+{
+  return (fs::path (directory_) / kPersonFolder / (frame_id + ".png")).string ();
+}
+
+cv::Mat
+Dataset::loadPartLabels (const std::string &frame_id) const
+{
+  const std::string path = partLabelPath (frame_id);
+  if (!hasPartLabels ())
+    throw DatasetError (path + ": this dataset has no part-label images (dataset.json lists no part_labels)");
+  const cv::Mat image = loadLabelImage (path, info_.width, info_.height);
+  for (int v = 0; v < image.rows; ++v)
+    for (int u = 0; u < image.cols; ++u)
+    {
+      const int id = image.at<std::uint8_t> (v, u);
+      if (id != 0 && !info_.part_labels.count (id))
+        throw DatasetError (path + ": pixel (" + std::to_string (u) + ", " + std::to_string (v) + ") is " +
+                            std::to_string (id) + ", which is not a part id of dataset.json's part_labels");
+    }
+  return image;
+}
+
+cv::Mat
+Dataset::loadPersonLabels (const std::string &frame_id) const
+{
+  const std::string path = personLabelPath (frame_id);
+  if (!hasPersonLabels ())
+    throw DatasetError (path + ": this dataset has no person images (dataset.json has no \"person_labels\": true)");
+  return loadLabelImage (path, info_.width, info_.height);
+}
+
 pcl::PointCloud<pcl::PointXYZ>::Ptr
 Dataset::loadFrame (const std::string &frame_id) const
 {
@@ -392,20 +511,29 @@ datasetReplaceProblem (const std::string &path)
   if (!saysAgexDataset (dir / "dataset.json"))
     return "is a directory without an agex dataset.json, not an agex dataset";
   // Only what DatasetWriter writes: anything else was put there by someone else.
+  const std::map<std::string, std::string> folders = {
+      {"frames", ".pcd"}, {kPartLabelFolder, ".png"}, {kPersonFolder, ".png"}};
   for (const auto &entry : fs::directory_iterator (dir, ec))
   {
     const std::string name = entry.path ().filename ().string ();
     const bool ours = (name == "dataset.json" || name == "labels.csv") ? entry.is_regular_file ()
-                      : name == "frames"                                 ? entry.is_directory ()
+                      : folders.count (name)                             ? entry.is_directory ()
                                                                          : false;
     if (!ours)
       return "holds " + name + ", which is not part of an agex dataset";
   }
-  for (const auto &entry : fs::directory_iterator (dir / "frames", ec))
-    if (!entry.is_regular_file () || entry.path ().extension () != ".pcd")
-      return "holds frames/" + entry.path ().filename ().string () + ", which is not part of an agex dataset";
   if (ec)
     return "cannot be listed: " + ec.message ();
+  for (const auto &[folder, extension] : folders)
+  {
+    if (!fs::is_directory (dir / folder, ec))
+      continue;
+    for (const auto &entry : fs::directory_iterator (dir / folder, ec))
+      if (!entry.is_regular_file () || entry.path ().extension () != extension)
+        return "holds " + folder + "/" + entry.path ().filename ().string () + ", which is not part of an agex dataset";
+    if (ec)
+      return "cannot be listed: " + ec.message ();
+  }
   return "";
 }
 
@@ -417,7 +545,8 @@ enclosingDataset (const std::string &file)
   if (ec)
     return "";
   fs::path dir = p.parent_path ();
-  if (dir.filename () == "frames" && p.extension () == ".pcd")
+  if ((dir.filename () == "frames" && p.extension () == ".pcd") ||
+      ((dir.filename () == kPartLabelFolder || dir.filename () == kPersonFolder) && p.extension () == ".png"))
     dir = dir.parent_path ();
   else if (p.filename () != "dataset.json" && p.filename () != "labels.csv")
     return "";
@@ -450,6 +579,10 @@ validSequenceName (const std::string &name, std::string *why)
 DatasetWriter::DatasetWriter (const std::string &directory, const DatasetInfo &info, bool overwrite)
   : directory_ (directory), info_ (info), overwrite_ (overwrite)
 {
+  for (const auto &[id, name] : info.part_labels)
+    if (id < 1 || id > 255 || name.empty () || name.size () > 64)
+      throw DatasetError (directory + ": part label " + std::to_string (id) + " '" + name +
+                          "': ids are 1-255 (0 is not a body), names 1-64 characters");
   std::error_code ec;
   if (fs::exists (fs::symlink_status (directory, ec)) && !overwrite)
     throw DatasetError (directory + ": already exists; pass --force to replace it");
@@ -508,6 +641,15 @@ DatasetWriter::framePath (const std::string &id, std::uint32_t width, std::uint3
 }
 
 void
+DatasetWriter::checkLabels (const std::string &id, const std::vector<PartLabel> &labels) const
+{
+  for (const PartLabel &label : labels)
+    if (label.person < 1 || label.person > 255)
+      throw DatasetError ("frame '" + id + "': a label's person is " + std::to_string (label.person) +
+                          "; persons are 1-255");
+}
+
+void
 DatasetWriter::addLabels (const std::string &id, const std::string &sequence, const std::vector<PartLabel> &labels)
 {
   std::string why;
@@ -525,9 +667,60 @@ DatasetWriter::addLabels (const std::string &id, const std::string &sequence, co
 }
 
 void
+DatasetWriter::addImage (const std::string &id, const cv::Mat &image, const char *folder, const char *what,
+                         std::set<std::string> &added)
+{
+  if (std::none_of (frames_.begin (), frames_.end (), [&] (const DatasetFrame &f) { return f.id == id; }))
+    throw DatasetError (std::string (what) + " for frame '" + id + "', which was not added");
+  if (added.count (id))
+    throw DatasetError (std::string (what) + " for frame '" + id + "' added twice");
+  if (image.type () != CV_8UC1 || image.cols != info_.width || image.rows != info_.height)
+    throw DatasetError (std::string (what) + " for frame '" + id + "' must be 8-bit, one channel, " +
+                        std::to_string (info_.width) + "x" + std::to_string (info_.height));
+  const fs::path dir = fs::path (staging_) / folder;
+  std::error_code ec;
+  fs::create_directories (dir, ec);
+  const std::string path = (dir / (id + ".png")).string ();
+  bool written = false;
+  try
+  {
+    written = cv::imwrite (path, image);
+  }
+  catch (const cv::Exception &)
+  {
+  }
+  if (!written)
+    throw DatasetError (path + ": cannot write the " + what);
+  added.insert (id);
+}
+
+void
+DatasetWriter::addPartLabels (const std::string &id, const cv::Mat &labels)
+{
+  if (info_.part_labels.empty ())
+    throw DatasetError ("part-label image for frame '" + id + "', but the dataset info names no part_labels");
+  for (int v = 0; v < labels.rows; ++v)
+    for (int u = 0; u < labels.cols && labels.type () == CV_8UC1; ++u)
+    {
+      const int value = labels.at<std::uint8_t> (v, u);
+      if (value != 0 && !info_.part_labels.count (value))
+        throw DatasetError ("part-label image for frame '" + id + "': pixel (" + std::to_string (u) + ", " +
+                            std::to_string (v) + ") is " + std::to_string (value) + ", not a part id of part_labels");
+    }
+  addImage (id, labels, kPartLabelFolder, "part-label image", part_label_ids_);
+}
+
+void
+DatasetWriter::addPersonLabels (const std::string &id, const cv::Mat &persons)
+{
+  addImage (id, persons, kPersonFolder, "person image", person_ids_);
+}
+
+void
 DatasetWriter::addFrame (const std::string &id, const std::string &sequence,
                          const pcl::PointCloud<pcl::PointXYZ> &cloud, const std::vector<PartLabel> &labels)
 {
+  checkLabels (id, labels);
   writeFrameFile (framePath (id, cloud.width, cloud.height), cloud);
   addLabels (id, sequence, labels);
 }
@@ -536,6 +729,7 @@ void
 DatasetWriter::addFrame (const std::string &id, const std::string &sequence,
                          const pcl::PointCloud<pcl::PointXYZRGBA> &cloud, const std::vector<PartLabel> &labels)
 {
+  checkLabels (id, labels);
   writeFrameFile (framePath (id, cloud.width, cloud.height), cloud);
   addLabels (id, sequence, labels);
 }
@@ -543,6 +737,12 @@ DatasetWriter::addFrame (const std::string &id, const std::string &sequence,
 void
 DatasetWriter::commit ()
 {
+  if (!info_.part_labels.empty () && part_label_ids_.size () != frames_.size ())
+    throw DatasetError (directory_ + ": " + std::to_string (frames_.size () - part_label_ids_.size ()) + " of " +
+                        std::to_string (frames_.size ()) + " frames have no part-label image; every frame needs one");
+  if (!person_ids_.empty () && person_ids_.size () != frames_.size ())
+    throw DatasetError (directory_ + ": " + std::to_string (frames_.size () - person_ids_.size ()) + " of " +
+                        std::to_string (frames_.size ()) + " frames have no person image; every frame needs one");
   nlohmann::json doc;
   doc["format"] = kFormat;
   doc["version"] = kVersion;
@@ -555,6 +755,14 @@ DatasetWriter::commit ()
   doc["depth_scale"] = info_.depth_scale;
   doc["units"] = "m";
   doc["provenance"] = info_.provenance;
+  if (!info_.part_labels.empty ())
+  {
+    doc["part_labels"] = nlohmann::json::object ();
+    for (const auto &[id, name] : info_.part_labels)
+      doc["part_labels"][std::to_string (id)] = name;
+  }
+  if (!person_ids_.empty ())
+    doc["person_labels"] = true;
   doc["frames"] = nlohmann::json::array ();
   for (const auto &f : frames_)
     doc["frames"].push_back ({{"id", f.id}, {"sequence", f.sequence}});

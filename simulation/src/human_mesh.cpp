@@ -131,54 +131,57 @@ isInSubtree (const std::vector<HumanMesh::Bone> &bones, int bone, int ancestor)
       return true;
   return false;
 }
-}  // namespace
+/** The three files of a MakeHuman directory. */
+struct AssetPaths
+{
+  std::filesystem::path obj, skeleton, weights;
+};
 
 int
-HumanMesh::bone (const std::string &name) const
+boneIndex (const std::vector<HumanMesh::Bone> &bones, const std::string &name)
 {
-  for (std::size_t i = 0; i < bones_.size (); ++i)
-    if (bones_[i].name == name)
+  for (std::size_t i = 0; i < bones.size (); ++i)
+    if (bones[i].name == name)
       return static_cast<int> (i);
   return -1;
 }
 
-HumanMesh
-HumanMesh::load (const std::string &directory)
+/** A joint's position: the mean of its helper vertices, listed under "joints". */
+Eigen::Vector3d
+jointPosition (const nlohmann::json &joints, const std::string &bone, const nlohmann::json &joint_name,
+               const Obj &obj, const AssetPaths &paths)
 {
-  const std::filesystem::path dir (directory);
-  const auto obj_path = dir / "base.obj", skeleton_path = dir / "default.mhskel",
-             weights_path = dir / "default_weights.mhw";
-  const Obj obj = readObj (obj_path);
-  const nlohmann::json skeleton = readJson (skeleton_path), weights = readJson (weights_path);
-  HumanMesh mesh;
+  const std::string name = joint_name.get<std::string> ();
+  if (!joints.contains (name) || !joints.at (name).is_array ())
+    throw HumanMeshError (paths.skeleton.string () + ": bone '" + bone + "' names joint '" + name +
+                          "', which is not a list of vertices under \"joints\"");
+  const auto &indices = joints.at (name);
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero ();
+  for (const auto &i : indices)
+  {
+    const long v = vertexIndex (i, obj.vertices.size ());
+    if (v < 0)
+      throw HumanMeshError (paths.skeleton.string () + ": joint '" + name + "' names vertex " + i.dump () + ", but " +
+                            paths.obj.string () + " has " + std::to_string (obj.vertices.size ()));
+    sum += obj.vertices[static_cast<std::size_t> (v)];
+  }
+  if (indices.empty ())
+    throw HumanMeshError (paths.skeleton.string () + ": joint '" + name + "' has no vertices");
+  return Eigen::Vector3d (sum / static_cast<double> (indices.size ()));
+}
 
-  // Skeleton: joint positions are the means of their helper vertices.
+/** The skeleton's bones, parents first: repeatedly take the bones whose parent is
+  * placed (names sorted, so the order does not depend on the file's). */
+std::vector<HumanMesh::Bone>
+readBones (const nlohmann::json &skeleton, const Obj &obj, const AssetPaths &paths)
+{
+  std::vector<HumanMesh::Bone> bones;
   try
   {
     const auto &joints = skeleton.at ("joints");
-    auto joint = [&] (const std::string &bone, const nlohmann::json &joint_name) {
-      const std::string name = joint_name.get<std::string> ();
-      if (!joints.contains (name) || !joints.at (name).is_array ())
-        throw HumanMeshError (skeleton_path.string () + ": bone '" + bone + "' names joint '" + name +
-                              "', which is not a list of vertices under \"joints\"");
-      const auto &indices = joints.at (name);
-      Eigen::Vector3d sum = Eigen::Vector3d::Zero ();
-      for (const auto &i : indices)
-      {
-        const long v = vertexIndex (i, obj.vertices.size ());
-        if (v < 0)
-          throw HumanMeshError (skeleton_path.string () + ": joint '" + name + "' names vertex " + i.dump () +
-                                ", but " + obj_path.string () + " has " + std::to_string (obj.vertices.size ()));
-        sum += obj.vertices[static_cast<std::size_t> (v)];
-      }
-      if (indices.empty ())
-        throw HumanMeshError (skeleton_path.string () + ": joint '" + name + "' has no vertices");
-      return Eigen::Vector3d (sum / static_cast<double> (indices.size ()));
-    };
-    // Parents first: repeatedly take the bones whose parent is placed (names sorted, so
-    // the order does not depend on the file's).
     if (!skeleton.is_object () || !joints.is_object () || !skeleton.at ("bones").is_object ())
-      throw HumanMeshError (skeleton_path.string () + ": not a MakeHuman skeleton: \"bones\" and \"joints\" must be objects");
+      throw HumanMeshError (paths.skeleton.string () +
+                            ": not a MakeHuman skeleton: \"bones\" and \"joints\" must be objects");
     std::map<std::string, nlohmann::json> pending;
     for (const auto &[name, b] : skeleton.at ("bones").items ())
       pending.emplace (name, b);
@@ -201,182 +204,360 @@ HumanMesh::load (const std::string &directory)
           }
           parent_index = found->second;
         }
-        Bone bone;
+        HumanMesh::Bone bone;
         bone.name = it->first;
         bone.parent = parent_index;
-        bone.head = joint (bone.name, b.at ("head"));
-        bone.tail = joint (bone.name, b.at ("tail"));
-        placed.emplace (bone.name, static_cast<int> (mesh.bones_.size ()));
-        mesh.bones_.push_back (std::move (bone));
+        bone.head = jointPosition (joints, bone.name, b.at ("head"), obj, paths);
+        bone.tail = jointPosition (joints, bone.name, b.at ("tail"), obj, paths);
+        placed.emplace (bone.name, static_cast<int> (bones.size ()));
+        bones.push_back (std::move (bone));
         it = pending.erase (it);
         progress = true;
       }
       if (!progress)
-        throw HumanMeshError (skeleton_path.string () + ": bone '" + pending.begin ()->first +
+        throw HumanMeshError (paths.skeleton.string () + ": bone '" + pending.begin ()->first +
                               "' has a parent that is missing or part of a cycle");
     }
   }
   catch (const nlohmann::json::exception &e)
   {
-    throw HumanMeshError (skeleton_path.string () + ": not a MakeHuman skeleton: " + e.what ());
+    throw HumanMeshError (paths.skeleton.string () + ": not a MakeHuman skeleton: " + e.what ());
   }
+  return bones;
+}
+
+/** The bones the body is posed, shaped and labelled by. */
+void
+requireBones (const std::vector<HumanMesh::Bone> &bones, const AssetPaths &paths)
+{
   for (const char *required : {"root", "head", "neck01", "spine03", "spine02", "upperarm01.L", "upperarm01.R",
                                "lowerarm01.L", "lowerarm01.R", "wrist.L", "wrist.R", "finger3-1.L", "finger3-1.R",
                                "upperleg01.L", "upperleg01.R", "lowerleg01.L", "lowerleg01.R", "foot.L", "foot.R",
                                "toe3-1.L", "toe3-1.R"})
-    if (mesh.bone (required) < 0)
-      throw HumanMeshError (skeleton_path.string () + ": the skeleton has no bone '" + required + "'");
+    if (boneIndex (bones, required) < 0)
+      throw HumanMeshError (paths.skeleton.string () + ": the skeleton has no bone '" + required + "'");
+}
 
-  // The body group's vertices, renumbered (obj_number keeps the file's, for messages).
-  std::vector<int> renumber (obj.vertices.size (), -1);
-  std::vector<long> obj_number;
+/** The body group's vertices, renumbered in the order the faces use them, and its
+  * faces split into triangles (fans). */
+struct BodyGroup
+{
+  std::vector<Eigen::Vector3d> vertices;
+  std::vector<Eigen::Vector3i> triangles;
+  std::vector<int> renumber;     ///< per OBJ vertex (0-based): its body vertex, -1 if none
+  std::vector<long> obj_number;  ///< per body vertex: its 1-based OBJ number, for messages
+};
+
+BodyGroup
+bodyGroup (const Obj &obj)
+{
+  BodyGroup body;
+  body.renumber.assign (obj.vertices.size (), -1);
   for (const auto &face : obj.body_faces)
     for (const int v : face)
-      if (renumber[static_cast<std::size_t> (v)] < 0)
+      if (body.renumber[static_cast<std::size_t> (v)] < 0)
       {
-        renumber[static_cast<std::size_t> (v)] = static_cast<int> (mesh.vertices_.size ());
-        mesh.vertices_.push_back (obj.vertices[static_cast<std::size_t> (v)]);
-        obj_number.push_back (v + 1L);
+        body.renumber[static_cast<std::size_t> (v)] = static_cast<int> (body.vertices.size ());
+        body.vertices.push_back (obj.vertices[static_cast<std::size_t> (v)]);
+        body.obj_number.push_back (v + 1L);
       }
   for (const auto &face : obj.body_faces)
     for (std::size_t k = 1; k + 1 < face.size (); ++k)
-      mesh.triangles_.emplace_back (renumber[static_cast<std::size_t> (face[0])],
-                                    renumber[static_cast<std::size_t> (face[k])],
-                                    renumber[static_cast<std::size_t> (face[k + 1])]);
+      body.triangles.emplace_back (body.renumber[static_cast<std::size_t> (face[0])],
+                                   body.renumber[static_cast<std::size_t> (face[k])],
+                                   body.renumber[static_cast<std::size_t> (face[k + 1])]);
+  return body;
+}
 
-  // Skin weights, normalised per vertex.
-  mesh.influences_.resize (mesh.vertices_.size ());
+/** The skin weights of the body's vertices (weights of other vertices are skipped). */
+std::vector<std::vector<HumanMesh::Influence>>
+readInfluences (const nlohmann::json &weights, const std::vector<HumanMesh::Bone> &bones, const BodyGroup &body,
+                const AssetPaths &paths)
+{
+  std::vector<std::vector<HumanMesh::Influence>> influences (body.vertices.size ());
   try
   {
     if (!weights.is_object () || !weights.at ("weights").is_object ())
-      throw HumanMeshError (weights_path.string () + ": not MakeHuman weights: no \"weights\" object of bones");
+      throw HumanMeshError (paths.weights.string () + ": not MakeHuman weights: no \"weights\" object of bones");
     for (const auto &[name, list] : weights.at ("weights").items ())
     {
       if (!list.is_array ())
-        throw HumanMeshError (weights_path.string () + ": bone '" + name + "': weights must be a list of [vertex, weight]");
-      const int b = mesh.bone (name);
+        throw HumanMeshError (paths.weights.string () + ": bone '" + name +
+                              "': weights must be a list of [vertex, weight]");
+      const int b = boneIndex (bones, name);
       if (b < 0)
-        throw HumanMeshError (weights_path.string () + ": weights for bone '" + name + "', which " +
-                              skeleton_path.string () + " does not have");
+        throw HumanMeshError (paths.weights.string () + ": weights for bone '" + name + "', which " +
+                              paths.skeleton.string () + " does not have");
       for (const auto &pair : list)
       {
         if (!pair.is_array () || pair.size () != 2)
-          throw HumanMeshError (weights_path.string () + ": bone '" + name + "': bad weight " + pair.dump () +
-                                " (a vertex of " + obj_path.string () + " and a weight >= 0)");
-        const long v = vertexIndex (pair.at (0), renumber.size ());
+          throw HumanMeshError (paths.weights.string () + ": bone '" + name + "': bad weight " + pair.dump () +
+                                " (a vertex of " + paths.obj.string () + " and a weight >= 0)");
+        const long v = vertexIndex (pair.at (0), body.renumber.size ());
         const double w = pair.at (1).is_number () ? pair.at (1).get<double> () : -1.0;
         if (v < 0 || !(w >= 0.0) || !std::isfinite (w))
-          throw HumanMeshError (weights_path.string () + ": bone '" + name + "': bad weight " + pair.dump () +
-                                " (a vertex of " + obj_path.string () + " and a weight >= 0)");
-        const int r = renumber[static_cast<std::size_t> (v)];
+          throw HumanMeshError (paths.weights.string () + ": bone '" + name + "': bad weight " + pair.dump () +
+                                " (a vertex of " + paths.obj.string () + " and a weight >= 0)");
+        const int r = body.renumber[static_cast<std::size_t> (v)];
         if (r >= 0 && w > 0.0)
-          mesh.influences_[static_cast<std::size_t> (r)].push_back (Influence{b, w});
+          influences[static_cast<std::size_t> (r)].push_back (HumanMesh::Influence{b, w});
       }
     }
   }
   catch (const nlohmann::json::exception &e)
   {
-    throw HumanMeshError (weights_path.string () + ": not MakeHuman weights: " + e.what ());
+    throw HumanMeshError (paths.weights.string () + ": not MakeHuman weights: " + e.what ());
   }
-  for (std::size_t v = 0; v < mesh.influences_.size (); ++v)
+  return influences;
+}
+
+/** Scales each vertex's weights to sum to 1; a vertex without weight is an error. */
+void
+normaliseInfluences (std::vector<std::vector<HumanMesh::Influence>> &influences, const BodyGroup &body,
+                     const AssetPaths &paths)
+{
+  for (std::size_t v = 0; v < influences.size (); ++v)
   {
-    auto &list = mesh.influences_[v];
+    auto &list = influences[v];
     double sum = 0.0;
     for (const auto &i : list)
       sum += i.weight;
     if (!(sum > 0.0))
-      throw HumanMeshError (weights_path.string () + ": vertex " + std::to_string (obj_number[v] - 1) + " (line 'v' #" +
-                            std::to_string (obj_number[v]) + " of " + obj_path.string () +
+      throw HumanMeshError (paths.weights.string () + ": vertex " + std::to_string (body.obj_number[v] - 1) +
+                            " (line 'v' #" + std::to_string (body.obj_number[v]) + " of " + paths.obj.string () +
                             ", group body) has no skin weight");
     for (auto &i : list)
       i.weight /= sum;
   }
+}
 
-  // Parts, by the bone with the largest weight.
-  const int head = mesh.bone ("head");
-  const int hands[2] = {mesh.bone ("wrist.L"), mesh.bone ("wrist.R")};
-  const int feet[2] = {mesh.bone ("foot.L"), mesh.bone ("foot.R")};
-  const int arms[2] = {mesh.bone ("upperarm01.L"), mesh.bone ("upperarm01.R")};
-  const int legs[2] = {mesh.bone ("upperleg01.L"), mesh.bone ("upperleg01.R")};
-  std::vector<Part> bone_part (mesh.bones_.size (), Trunk);
-  for (std::size_t b = 0; b < mesh.bones_.size (); ++b)
+/** The part each bone belongs to, by the subtree it lies in. */
+std::vector<HumanMesh::Part>
+boneParts (const std::vector<HumanMesh::Bone> &bones)
+{
+  const int head = boneIndex (bones, "head");
+  const int hands[2] = {boneIndex (bones, "wrist.L"), boneIndex (bones, "wrist.R")};
+  const int feet[2] = {boneIndex (bones, "foot.L"), boneIndex (bones, "foot.R")};
+  const int arms[2] = {boneIndex (bones, "upperarm01.L"), boneIndex (bones, "upperarm01.R")};
+  const int legs[2] = {boneIndex (bones, "upperleg01.L"), boneIndex (bones, "upperleg01.R")};
+  std::vector<HumanMesh::Part> bone_part (bones.size (), HumanMesh::Trunk);
+  for (std::size_t b = 0; b < bones.size (); ++b)
   {
     const int bi = static_cast<int> (b);
-    if (isInSubtree (mesh.bones_, bi, head))
-      bone_part[b] = Head;
+    if (isInSubtree (bones, bi, head))
+      bone_part[b] = HumanMesh::Head;
     for (int side = 0; side < 2; ++side)
     {
       // Hands and feet lie inside the arm and leg subtrees: test them last.
-      if (isInSubtree (mesh.bones_, bi, arms[side]))
-        bone_part[b] = side == 0 ? LeftArm : RightArm;
-      if (isInSubtree (mesh.bones_, bi, legs[side]))
-        bone_part[b] = side == 0 ? LeftLeg : RightLeg;
-      if (isInSubtree (mesh.bones_, bi, hands[side]))
-        bone_part[b] = side == 0 ? LeftHand : RightHand;
-      if (isInSubtree (mesh.bones_, bi, feet[side]))
-        bone_part[b] = side == 0 ? LeftFoot : RightFoot;
+      if (isInSubtree (bones, bi, arms[side]))
+        bone_part[b] = side == 0 ? HumanMesh::LeftArm : HumanMesh::RightArm;
+      if (isInSubtree (bones, bi, legs[side]))
+        bone_part[b] = side == 0 ? HumanMesh::LeftLeg : HumanMesh::RightLeg;
+      if (isInSubtree (bones, bi, hands[side]))
+        bone_part[b] = side == 0 ? HumanMesh::LeftHand : HumanMesh::RightHand;
+      if (isInSubtree (bones, bi, feet[side]))
+        bone_part[b] = side == 0 ? HumanMesh::LeftFoot : HumanMesh::RightFoot;
     }
   }
-  mesh.parts_.resize (mesh.vertices_.size ());
-  for (std::size_t v = 0; v < mesh.vertices_.size (); ++v)
-  {
-    const auto &list = mesh.influences_[v];
-    const auto top = std::max_element (list.begin (), list.end (),
-                                       [] (const Influence &a, const Influence &b) { return a.weight < b.weight; });
-    mesh.parts_[v] = bone_part[static_cast<std::size_t> (top->bone)];
-  }
-  for (const auto &t : mesh.triangles_)
-  {
-    const Part a = mesh.parts_[static_cast<std::size_t> (t[0])], b = mesh.parts_[static_cast<std::size_t> (t[1])],
-               c = mesh.parts_[static_cast<std::size_t> (t[2])];
-    mesh.triangle_parts_.push_back (b == c ? b : a);
-  }
+  return bone_part;
+}
 
-  // Tips: the top of the head, the farthest point of each hand along the middle
-  // finger, the front of each foot.
-  auto extreme = [&] (Part part, const Eigen::Vector3d &from, const Eigen::Vector3d &direction) {
-    int best = -1;
-    double best_value = -std::numeric_limits<double>::infinity ();
-    for (std::size_t v = 0; v < mesh.vertices_.size (); ++v)
-      if (mesh.parts_[v] == part)
-      {
-        const double value = (mesh.vertices_[v] - from).dot (direction);
-        if (value > best_value)
-        {
-          best_value = value;
-          best = static_cast<int> (v);
-        }
-      }
-    if (best < 0)
-      throw HumanMeshError (weights_path.string () + ": no body vertex is weighted mostly to the " +
-                            (part == Head ? "head" : part <= RightHand ? "hands" : "feet"));
-    return best;
+/** Each vertex's part: that of the bone with the largest weight. */
+std::vector<HumanMesh::Part>
+vertexParts (const std::vector<std::vector<HumanMesh::Influence>> &influences,
+             const std::vector<HumanMesh::Part> &bone_part)
+{
+  std::vector<HumanMesh::Part> parts (influences.size ());
+  for (std::size_t v = 0; v < influences.size (); ++v)
+  {
+    const auto &list = influences[v];
+    const auto top = std::max_element (list.begin (), list.end (), [] (const HumanMesh::Influence &a,
+                                                                       const HumanMesh::Influence &b) {
+      return a.weight < b.weight;
+    });
+    parts[v] = bone_part[static_cast<std::size_t> (top->bone)];
+  }
+  return parts;
+}
+
+/** Each triangle's part: that of its second and third corners if they agree, else the
+  * first's (so that of most of its corners). */
+std::vector<HumanMesh::Part>
+partsOfTriangles (const std::vector<Eigen::Vector3i> &triangles, const std::vector<HumanMesh::Part> &parts)
+{
+  std::vector<HumanMesh::Part> result;
+  for (const auto &t : triangles)
+  {
+    const HumanMesh::Part a = parts[static_cast<std::size_t> (t[0])], b = parts[static_cast<std::size_t> (t[1])],
+                          c = parts[static_cast<std::size_t> (t[2])];
+    result.push_back (b == c ? b : a);
+  }
+  return result;
+}
+
+/** The per-pixel label part of each bone (HumanMesh::boneLabels). */
+std::vector<SynthPart>
+labelBones (const std::vector<HumanMesh::Bone> &bones)
+{
+  struct Subtree
+  {
+    const char *bone;
+    SynthPart left, right;  ///< for a sided bone (name + ".L" / ".R"); left for a middle one
   };
-  mesh.tips_.fill (-1);
-  mesh.tips_[Head] = extreme (Head, Eigen::Vector3d::Zero (), Eigen::Vector3d::UnitY ());
+  // Outer subtrees first, so that the inner ones (a hand in its arm) win.
+  static const Subtree subtrees[] = {
+      {"neck01", SynthPart::Neck, SynthPart::Neck},
+      {"head", SynthPart::Head, SynthPart::Head},
+      {"upperarm01", SynthPart::LeftUpperArm, SynthPart::RightUpperArm},
+      {"lowerarm01", SynthPart::LeftForearm, SynthPart::RightForearm},
+      {"wrist", SynthPart::LeftHand, SynthPart::RightHand},
+      {"upperleg01", SynthPart::LeftThigh, SynthPart::RightThigh},
+      {"lowerleg01", SynthPart::LeftLowerLeg, SynthPart::RightLowerLeg},
+      {"foot", SynthPart::LeftFoot, SynthPart::RightFoot}};
+  std::vector<SynthPart> labels (bones.size (), SynthPart::Torso);
+  for (const char *pelvis : {"root", "spine05", "pelvis.L", "pelvis.R"})
+  {
+    const int b = boneIndex (bones, pelvis);
+    if (b >= 0)
+      labels[static_cast<std::size_t> (b)] = SynthPart::Pelvis;
+  }
+  for (const Subtree &subtree : subtrees)
+  {
+    const bool sided = subtree.left != subtree.right;
+    for (int side = 0; side < (sided ? 2 : 1); ++side)
+    {
+      const int top = boneIndex (bones, std::string (subtree.bone) + (sided ? (side == 0 ? ".L" : ".R") : ""));
+      if (top < 0)
+        continue;
+      for (std::size_t b = 0; b < bones.size (); ++b)
+        if (isInSubtree (bones, static_cast<int> (b), top))
+          labels[b] = side == 0 ? subtree.left : subtree.right;
+    }
+  }
+  return labels;
+}
+
+/** Each triangle's label: that of the bone with the largest weight over its corners. */
+std::vector<SynthPart>
+labelTriangles (const std::vector<Eigen::Vector3i> &triangles,
+                const std::vector<std::vector<HumanMesh::Influence>> &influences,
+                const std::vector<SynthPart> &bone_labels)
+{
+  std::vector<SynthPart> labels;
+  labels.reserve (triangles.size ());
+  std::map<int, double> weight;  // ordered by bone: ties go to the first
+  for (const auto &t : triangles)
+  {
+    weight.clear ();
+    for (int k = 0; k < 3; ++k)
+      for (const auto &influence : influences[static_cast<std::size_t> (t[k])])
+        weight[influence.bone] += influence.weight;
+    int best = weight.begin ()->first;
+    for (const auto &[bone, w] : weight)
+      if (w > weight[best])
+        best = bone;
+    labels.push_back (bone_labels[static_cast<std::size_t> (best)]);
+  }
+  return labels;
+}
+
+/** The vertex of a part farthest along a direction from a point. */
+int
+extremeVertex (const std::vector<Eigen::Vector3d> &vertices, const std::vector<HumanMesh::Part> &parts,
+               HumanMesh::Part part, const Eigen::Vector3d &from, const Eigen::Vector3d &direction,
+               const AssetPaths &paths)
+{
+  int best = -1;
+  double best_value = -std::numeric_limits<double>::infinity ();
+  for (std::size_t v = 0; v < vertices.size (); ++v)
+    if (parts[v] == part)
+    {
+      const double value = (vertices[v] - from).dot (direction);
+      if (value > best_value)
+      {
+        best_value = value;
+        best = static_cast<int> (v);
+      }
+    }
+  if (best < 0)
+    throw HumanMeshError (paths.weights.string () + ": no body vertex is weighted mostly to the " +
+                          (part == HumanMesh::Head ? "head" : part <= HumanMesh::RightHand ? "hands" : "feet"));
+  return best;
+}
+
+/** Tips: the top of the head, the farthest point of each hand along the middle
+  * finger, the front of each foot; -1 for the other parts. */
+std::array<int, HumanMesh::kParts>
+findTipVertices (const std::vector<Eigen::Vector3d> &vertices, const std::vector<HumanMesh::Part> &parts,
+             const std::vector<HumanMesh::Bone> &bones, const AssetPaths &paths)
+{
+  std::array<int, HumanMesh::kParts> tips;
+  tips.fill (-1);
+  tips[HumanMesh::Head] =
+      extremeVertex (vertices, parts, HumanMesh::Head, Eigen::Vector3d::Zero (), Eigen::Vector3d::UnitY (), paths);
   for (int side = 0; side < 2; ++side)
   {
-    const char *s = side == 0 ? ".L" : ".R";
-    const Bone &wrist = mesh.bones_[static_cast<std::size_t> (hands[side])];
-    const Bone &finger = mesh.bones_[static_cast<std::size_t> (mesh.bone (std::string ("finger3-1") + s))];
-    mesh.tips_[side == 0 ? LeftHand : RightHand] =
-        extreme (side == 0 ? LeftHand : RightHand, wrist.head, (finger.head - wrist.head).normalized ());
-    const Bone &foot = mesh.bones_[static_cast<std::size_t> (feet[side])];
-    const Bone &toe = mesh.bones_[static_cast<std::size_t> (mesh.bone (std::string ("toe3-1") + s))];
+    const std::string s = side == 0 ? ".L" : ".R";
+    const HumanMesh::Part hand = side == 0 ? HumanMesh::LeftHand : HumanMesh::RightHand;
+    const HumanMesh::Part foot_part = side == 0 ? HumanMesh::LeftFoot : HumanMesh::RightFoot;
+    const HumanMesh::Bone &wrist = bones[static_cast<std::size_t> (boneIndex (bones, "wrist" + s))];
+    const HumanMesh::Bone &finger = bones[static_cast<std::size_t> (boneIndex (bones, "finger3-1" + s))];
+    tips[hand] = extremeVertex (vertices, parts, hand, wrist.head, (finger.head - wrist.head).normalized (), paths);
+    const HumanMesh::Bone &foot = bones[static_cast<std::size_t> (boneIndex (bones, "foot" + s))];
+    const HumanMesh::Bone &toe = bones[static_cast<std::size_t> (boneIndex (bones, "toe3-1" + s))];
     Eigen::Vector3d forward = toe.head - foot.head;
     forward.y () = 0.0;  // the front of the foot, not the sole under the toes
-    mesh.tips_[side == 0 ? LeftFoot : RightFoot] = extreme (side == 0 ? LeftFoot : RightFoot, foot.head, forward.normalized ());
+    tips[foot_part] = extremeVertex (vertices, parts, foot_part, foot.head, forward.normalized (), paths);
   }
+  return tips;
+}
+
+/** Rest-pose height (Y extent of the vertices); a standing person is expected. */
+double
+standingHeight (const std::vector<Eigen::Vector3d> &vertices, const AssetPaths &paths)
+{
   double lowest = std::numeric_limits<double>::infinity (), highest = -lowest;
-  for (const auto &v : mesh.vertices_)
+  for (const auto &v : vertices)
   {
     lowest = std::min (lowest, v.y ());
     highest = std::max (highest, v.y ());
   }
-  mesh.height_ = highest - lowest;
-  if (!(mesh.height_ >= 0.5))
-    throw HumanMeshError (obj_path.string () + ": the body is " + std::to_string (mesh.height_) +
+  const double height = highest - lowest;
+  if (!(height >= 0.5))
+    throw HumanMeshError (paths.obj.string () + ": the body is " + std::to_string (height) +
                           " m tall (decimetres read as 0.1 m); a standing person is expected");
+  return height;
+}
+}  // namespace
+
+int
+HumanMesh::bone (const std::string &name) const
+{
+  return boneIndex (bones_, name);
+}
+
+HumanMesh
+HumanMesh::load (const std::string &directory)
+{
+  const std::filesystem::path dir (directory);
+  const AssetPaths paths{dir / "base.obj", dir / "default.mhskel", dir / "default_weights.mhw"};
+  const Obj obj = readObj (paths.obj);
+  const nlohmann::json skeleton = readJson (paths.skeleton), weights = readJson (paths.weights);
+
+  HumanMesh mesh;
+  mesh.bones_ = readBones (skeleton, obj, paths);
+  requireBones (mesh.bones_, paths);
+  BodyGroup body = bodyGroup (obj);
+  mesh.influences_ = readInfluences (weights, mesh.bones_, body, paths);
+  normaliseInfluences (mesh.influences_, body, paths);
+  mesh.vertices_ = std::move (body.vertices);
+  mesh.triangles_ = std::move (body.triangles);
+  mesh.parts_ = vertexParts (mesh.influences_, boneParts (mesh.bones_));
+  mesh.triangle_parts_ = partsOfTriangles (mesh.triangles_, mesh.parts_);
+  mesh.bone_labels_ = labelBones (mesh.bones_);
+  mesh.triangle_labels_ = labelTriangles (mesh.triangles_, mesh.influences_, mesh.bone_labels_);
+  mesh.tips_ = findTipVertices (mesh.vertices_, mesh.parts_, mesh.bones_, paths);
+  mesh.height_ = standingHeight (mesh.vertices_, paths);
   return mesh;
 }
 }  // namespace agex

@@ -254,10 +254,12 @@ buildMeshBody (const MotionClip &clip, int frame, const BodyParams &params, cons
     std::vector<int> local (n, -1);
     std::vector<Eigen::Vector3d> vertices;
     std::vector<Eigen::Vector3i> triangles;
+    auto labels = std::make_shared<std::vector<SynthPart>> ();
     for (std::size_t t = 0; t < mesh.triangles ().size (); ++t)
     {
       if (mesh.triangleParts ()[t] != part)
         continue;
+      labels->push_back (mesh.triangleLabels ()[t]);
       Eigen::Vector3i corners;
       for (int k = 0; k < 3; ++k)
       {
@@ -275,6 +277,8 @@ buildMeshBody (const MotionClip &clip, int frame, const BodyParams &params, cons
         std::make_shared<const SynthMesh> (std::move (vertices), std::move (triangles)), SynthObject::Person);
     primitive.reflectivity = static_cast<float> (params.reflectivity);
     primitive.material = partMaterial (static_cast<HumanMesh::Part> (part));
+    // Pixel labels per triangle, finer than the primitives (an arm is upper arm and forearm).
+    primitive.triangle_parts = std::move (labels);
     body.primitives.push_back (std::move (primitive));
   }
 

@@ -17,13 +17,25 @@ namespace
 {
 using Rgb = Eigen::Vector3d;  // linear 0..1
 
+/** Three uniform values; drawn last component first, in sequenced statements, so the
+  * draws do not depend on the compiler's order of evaluating arguments (this is the
+  * order earlier builds happened to use). */
+Eigen::Vector3d
+randomVector (SynthRng &rng, double lo, double hi)
+{
+  const double z = rng.uniform (lo, hi);
+  const double y = rng.uniform (lo, hi);
+  const double x = rng.uniform (lo, hi);
+  return Eigen::Vector3d (x, y, z);
+}
+
 Rgb
 randomColour (SynthRng &rng)
 {
   // Half saturated, half muted: clothes and walls are often grey, black or white.
   if (rng.chance (0.4))
     return Rgb::Constant (rng.uniform (0.05, 0.95));
-  return Rgb (rng.uniform (0.0, 1.0), rng.uniform (0.0, 1.0), rng.uniform (0.0, 1.0));
+  return randomVector (rng, 0.0, 1.0);
 }
 
 Rgb
@@ -46,7 +58,8 @@ struct Pattern
   {
     Pattern p;
     auto wave = [&] () {
-      const Eigen::Vector3d d = Eigen::Vector3d (rng.normal (), rng.normal (), rng.normal ()).normalized ();
+      const double z = rng.normal (), y = rng.normal (), x = rng.normal ();  // last first, as randomVector
+      const Eigen::Vector3d d = Eigen::Vector3d (x, y, z).normalized ();
       return Eigen::Vector3d (d * (2.0 * M_PI / rng.uniform (min_period, max_period)));
     };
     p.k1 = wave ();
@@ -93,7 +106,8 @@ randomLook (const SynthFrame &frame, SynthRng &rng)
   look.clothes_contrast = rng.uniform (0.0, 0.15);
   look.room_contrast = rng.uniform (0.0, 0.5);
   // Light from above and in front of the person, in the world; to the camera frame.
-  const Eigen::Vector3d world_dir (rng.uniform (-1.0, 1.0), rng.uniform (0.5, 2.0), rng.uniform (-1.0, 1.0));
+  const double light_z = rng.uniform (-1.0, 1.0), light_y = rng.uniform (0.5, 2.0), light_x = rng.uniform (-1.0, 1.0);
+  const Eigen::Vector3d world_dir (light_x, light_y, light_z);
   look.light = (frame.world_to_camera.linear () * world_dir).normalized ();
   look.ambient = rng.uniform (0.25, 0.7);
   look.noise = rng.uniform (0.005, 0.03);

@@ -146,7 +146,8 @@ SynthMesh::build (int begin, int end, std::vector<Eigen::Vector3d> &centroids)
 }
 
 double
-SynthMesh::intersect (const Eigen::Vector3d &o, const Eigen::Vector3d &d, double t_min, Eigen::Vector3d *normal) const
+SynthMesh::intersect (const Eigen::Vector3d &o, const Eigen::Vector3d &d, double t_min, Eigen::Vector3d *normal,
+                      int *triangle) const
 {
   if (nodes_.empty ())
     return -1.0;
@@ -199,6 +200,8 @@ SynthMesh::intersect (const Eigen::Vector3d &o, const Eigen::Vector3d &d, double
   }
   if (best_triangle < 0)
     return -1.0;
+  if (triangle)
+    *triangle = best_triangle;
   if (normal)
   {
     const auto &t = triangles_[best_triangle];

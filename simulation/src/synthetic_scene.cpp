@@ -10,6 +10,8 @@
 #include <filesystem>
 #include <iomanip>
 #include <limits>
+#include <numeric>
+#include <set>
 #include <sstream>
 #include <stdexcept>
 
@@ -297,8 +299,11 @@ SynthPrimitive::boundingSphere (Eigen::Vector3d &c, double &r) const
 }
 
 double
-SynthPrimitive::intersect (const Eigen::Vector3d &o, const Eigen::Vector3d &d, double t_min, Eigen::Vector3d *n) const
+SynthPrimitive::intersect (const Eigen::Vector3d &o, const Eigen::Vector3d &d, double t_min, Eigen::Vector3d *n,
+                           int *triangle) const
 {
+  if (triangle)
+    *triangle = -1;
   switch (shape)
   {
     case Shape::Capsule:
@@ -422,13 +427,24 @@ SynthPrimitive::intersect (const Eigen::Vector3d &o, const Eigen::Vector3d &d, d
     case Shape::Mesh:
     {
       // The placement is rigid, so t is the same in the mesh's own frame.
-      const double t = mesh->intersect (axes.transpose () * (o - centre), axes.transpose () * d, t_min, n);
+      const double t = mesh->intersect (axes.transpose () * (o - centre), axes.transpose () * d, t_min, n, triangle);
       if (t >= 0 && n)
         *n = axes * *n;
       return t;
     }
   }
   return -1.0;
+}
+
+SynthPart
+SynthPrimitive::partAt (int triangle) const
+{
+  if (object != SynthObject::Person)
+    return SynthPart::None;
+  SynthPart p = part;
+  if (triangle_parts && triangle >= 0 && static_cast<std::size_t> (triangle) < triangle_parts->size ())
+    p = (*triangle_parts)[static_cast<std::size_t> (triangle)];
+  return p == SynthPart::None ? SynthPart::Unknown : p;
 }
 
 double
@@ -692,11 +708,15 @@ buildBody (const MotionClip &clip, int frame, const BodyParams &bp)
 
   BodyModel body;
   SynthMaterial material = SynthMaterial::Skin;  // of the primitives added next
+  SynthPart part = SynthPart::Head;              // likewise
   auto add = [&] (SynthPrimitive p) {
     p.reflectivity = refl;
     p.material = material;
+    p.part = part;
     body.primitives.push_back (p);
   };
+  // Side 0 is the subject's left.
+  auto sided = [] (int side, SynthPart left, SynthPart right) { return side == 0 ? left : right; };
   auto capsule = [&] (const Eigen::Vector3d &a, const Eigen::Vector3d &b, double r) {
     add (SynthPrimitive::capsule (a, b, r, SynthObject::Person));
   };
@@ -717,10 +737,12 @@ buildBody (const MotionClip &clip, int frame, const BodyParams &bp)
     body.tip[0] = c + hb.col (1) * semi.y ();
     body.base[0] = P (m.head);
   }
+  part = SynthPart::Neck;
   capsule (P (m.neck), P (m.head), 0.052 * girth);
   // Torso: chest, abdomen and pelvis ellipsoids, a capsule across the shoulders.
   const double td = bp.torso_depth;
   material = SynthMaterial::Top;
+  part = SynthPart::Torso;
   {
     const Eigen::Matrix3d cb = B (m.spine_mid);
     const Eigen::Vector3d c = 0.5 * (P (m.spine_mid) + P (m.neck)) + cb * Eigen::Vector3d (0, 0.01, -0.01) * s;
@@ -734,8 +756,10 @@ buildBody (const MotionClip &clip, int frame, const BodyParams &bp)
   {
     const Eigen::Matrix3d pb = B (m.root);
     const Eigen::Vector3d c = P (m.root) + pb * Eigen::Vector3d (0, -0.045, -0.01) * s;
+    part = SynthPart::Pelvis;
     ellipsoid (c, pb, Eigen::Vector3d (0.16 * girth, 0.11 * s, 0.11 * girth * td));
   }
+  part = SynthPart::Torso;
   capsule (P (m.shoulder[0]), P (m.shoulder[1]), 0.055 * girth);
 
   for (int side = 0; side < 2; ++side)
@@ -744,7 +768,9 @@ buildBody (const MotionClip &clip, int frame, const BodyParams &bp)
     const double arm = girth * bp.arm_girth;
     const Eigen::Vector3d sh = P (m.shoulder[side]), el = P (m.elbow[side]), wr = P (m.wrist[side]);
     material = SynthMaterial::Top;
+    part = sided (side, SynthPart::LeftUpperArm, SynthPart::RightUpperArm);
     capsule (sh, el, 0.047 * arm);
+    part = sided (side, SynthPart::LeftForearm, SynthPart::RightForearm);
     capsule (el, wr, 0.038 * arm);
     Eigen::Vector3d hand_dir = wr - el;
     if (m.hand_end[side] >= 0 && (P (m.hand_end[side]) - wr).norm () > 0.01 * s)
@@ -757,6 +783,7 @@ buildBody (const MotionClip &clip, int frame, const BodyParams &bp)
     body.tip_primitives[1 + side] = {static_cast<int> (body.primitives.size ())};
     body.tip_tolerance[1 + side] = hand_r + 0.03;
     material = SynthMaterial::Skin;
+    part = sided (side, SynthPart::LeftHand, SynthPart::RightHand);
     capsule (wr + hand_dir * 0.02 * s, wr + hand_dir * hand_len, hand_r);
     body.tip[1 + side] = wr + hand_dir * (hand_len + hand_r);
     body.base[1 + side] = wr;
@@ -765,14 +792,20 @@ buildBody (const MotionClip &clip, int frame, const BodyParams &bp)
     const double leg = girth * bp.leg_girth;
     const Eigen::Vector3d hp = P (m.hip[side]), kn = P (m.knee[side]), an = P (m.ankle[side]);
     material = SynthMaterial::Bottom;
+    const SynthPart thigh = sided (side, SynthPart::LeftThigh, SynthPart::RightThigh);
+    const SynthPart lower_leg = sided (side, SynthPart::LeftLowerLeg, SynthPart::RightLowerLeg);
+    part = thigh;
     capsule (hp, kn, 0.06 * leg);
+    part = lower_leg;
     capsule (kn, an, 0.045 * leg);
     {
       const double len = (kn - hp).norm ();
       const Eigen::Matrix3d lb = basisAlong (kn - hp, B (m.hip[side]).col (2));
+      part = thigh;
       ellipsoid (hp + 0.4 * (kn - hp), lb, Eigen::Vector3d (0.08 * leg, 0.55 * len, 0.08 * leg));
     }
     {
+      part = lower_leg;
       const double len = (an - kn).norm ();
       const Eigen::Matrix3d lb = basisAlong (an - kn, B (m.knee[side]).col (2));
       ellipsoid (kn + 0.35 * (an - kn) - lb.col (2) * 0.012 * s, lb, Eigen::Vector3d (0.056 * leg, 0.4 * len, 0.058 * leg));
@@ -798,6 +831,7 @@ buildBody (const MotionClip &clip, int frame, const BodyParams &bp)
                                      static_cast<int> (body.primitives.size ()) + 1};
     body.tip_tolerance[3 + side] = foot_r + 0.03;
     material = SynthMaterial::Shoes;
+    part = sided (side, SynthPart::LeftFoot, SynthPart::RightFoot);
     capsule (heel, ball, foot_r);
     capsule (ball, toe_end, toe_r);
     body.tip[3 + side] = toe_end + (toe_end - ball).normalized () * toe_r;
@@ -839,6 +873,7 @@ struct Hit
 {
   double t = -1.0;  ///< along the unit ray, -1 = none
   int primitive = -1;
+  int triangle = -1;  ///< of a mesh primitive
   double cos = 0.0;
 };
 
@@ -915,6 +950,7 @@ public:
   {
     Hit best;
     Eigen::Vector3d n, best_n = Eigen::Vector3d::Zero ();
+    int triangle = -1;
     if (planes)
       for (const int i : planes_)
       {
@@ -923,6 +959,7 @@ public:
         {
           best.t = t;
           best.primitive = i;
+          best.triangle = -1;
           best_n = n;
         }
       }
@@ -938,11 +975,12 @@ public:
         continue;
       if (best.t > 0 && along - std::sqrt (box.r2) > best.t)
         continue;
-      const double t = scene_.primitives[box.index].intersect (o, d, 1e-6, &n);
+      const double t = scene_.primitives[box.index].intersect (o, d, 1e-6, &n, &triangle);
       if (t > 0 && (best.t < 0 || t < best.t))
       {
         best.t = t;
         best.primitive = box.index;
+        best.triangle = triangle;
         best_n = n;
       }
     }
@@ -997,18 +1035,24 @@ private:
 };
 }  // namespace
 
-void
-renderScene (const SynthScene &scene, const SensorModel &sensor, SynthRng &rng, SynthFrame &frame)
+namespace
 {
-  if (sensor.sensor == SynthSensor::Bonn)
-    throw std::invalid_argument ("renderScene: bonn frames are rendered with renderSensorModel (SynthSensor::Bonn), "
-                                 "then made into the Bonn view");
+/** The unit ray through (sub)pixel (u, v) of a sensor. */
+struct PixelRays
+{
+  const CameraIntrinsics &k;
+  Eigen::Vector3d operator() (double u, double v) const
+  {
+    return Eigen::Vector3d ((u - k.cx) / k.fx, (v - k.cy) / k.fy, 1.0).normalized ();
+  }
+};
+
+/** Sizes the frame's cloud and ground truth to the sensor, everything invalid. */
+void
+resetFrame (const SynthScene &scene, const SensorModel &sensor, SynthFrame &frame)
+{
   const int w = sensor.width, h = sensor.height;
   const std::size_t n = static_cast<std::size_t> (w) * h;
-  const CameraIntrinsics &k = sensor.intrinsics;
-  const int ss = std::max (1, sensor.supersample);
-  const Eigen::Vector3d origin = Eigen::Vector3d::Zero ();
-
   frame.scene = scene;
   frame.cloud = pcl::PointCloud<pcl::PointXYZ> (static_cast<std::uint32_t> (w), static_cast<std::uint32_t> (h),
                                                 pcl::PointXYZ (kNaN, kNaN, kNaN));
@@ -1018,154 +1062,268 @@ renderScene (const SynthScene &scene, const SensorModel &sensor, SynthRng &rng, 
   frame.ideal_z.assign (n, kNaN);
   frame.sample_min_z.assign (n, kNaN);
   frame.sample_max_z.assign (n, kNaN);
-  std::vector<float> range (n, kNaN);  // measured range along the pixel-centre ray, before noise
-  std::vector<float> amplitudes (sensor.sensor == SynthSensor::Sr4000 ? n : 0, 0.0f);
+  frame.clean_z.assign (n, kNaN);
+  frame.part_label.assign (n, 0);
+  frame.person_label.assign (n, 0);
+}
 
-  const Binner binner (scene, sensor, 0.0, 0.0);
-  auto pixelRay = [&] (double u, double v) {
-    return Eigen::Vector3d ((u - k.cx) / k.fx, (v - k.cy) / k.fy, 1.0).normalized ();
-  };
-  // Pass 1: the ray through every pixel centre.
-  std::vector<Hit> centre (n);
+/** Pass 1: the nearest hit of the ray through every pixel centre (row-major). */
+std::vector<Hit>
+traceCentreRays (const Binner &binner, const SensorModel &sensor, const PixelRays &ray)
+{
+  const int w = sensor.width, h = sensor.height;
+  const Eigen::Vector3d origin = Eigen::Vector3d::Zero ();
+  std::vector<Hit> centre (static_cast<std::size_t> (w) * h);
   for (int v = 0; v < h; ++v)
     for (int u = 0; u < w; ++u)
-      centre[static_cast<std::size_t> (v) * w + u] = binner.trace (u, v, origin, pixelRay (u, v), true);
+      centre[static_cast<std::size_t> (v) * w + u] = binner.trace (u, v, origin, ray (u, v), true);
+  return centre;
+}
 
-  // Pass 2: supersampling (ss x ss samples) where the centre rays of the pixel and its
-  // 8 neighbours do not all see the same primitive; elsewhere the centre sample stands
-  // for all of them (a smooth surface averages to its centre value).
-  std::vector<Hit> hits (static_cast<std::size_t> (ss) * ss);
-  std::vector<Eigen::Vector3d> dirs (hits.size ());
-  for (int v = 0; v < h; ++v)
-    for (int u = 0; u < w; ++u)
+/** True if the centre rays of pixel (u, v) and of its 8 neighbours (clamped at the
+  * border) all see the same primitive. */
+bool
+neighboursSeeTheSamePrimitive (const std::vector<Hit> &centre, int u, int v, int w, int h)
+{
+  const std::size_t i = static_cast<std::size_t> (v) * w + u;
+  for (int dv = -1; dv <= 1; ++dv)
+    for (int du = -1; du <= 1; ++du)
     {
-      const std::size_t i = static_cast<std::size_t> (v) * w + u;
-      bool uniform = true;
-      if (ss > 1)
-        for (int dv = -1; dv <= 1 && uniform; ++dv)
-          for (int du = -1; du <= 1; ++du)
-          {
-            const int uu = std::clamp (u + du, 0, w - 1), vv = std::clamp (v + dv, 0, h - 1);
-            if (centre[static_cast<std::size_t> (vv) * w + uu].primitive != centre[i].primitive)
-            {
-              uniform = false;
-              break;
-            }
-          }
-      std::size_t count = 1;
-      if (uniform)
-      {
-        hits[0] = centre[i];
-        dirs[0] = pixelRay (u, v);
-      }
-      else
-      {
-        count = hits.size ();
-        for (int sy = 0; sy < ss; ++sy)
-          for (int sx = 0; sx < ss; ++sx)
-          {
-            const std::size_t s = static_cast<std::size_t> (sy) * ss + sx;
-            const double ou = (sx + 0.5) / ss - 0.5, ov = (sy + 0.5) / ss - 0.5;
-            dirs[s] = pixelRay (u + ou, v + ov);
-            hits[s] = (ou == 0.0 && ov == 0.0) ? centre[i] : binner.trace (u, v, origin, dirs[s], true);
-          }
-      }
-      const double weight = uniform ? static_cast<double> (hits.size ()) : 1.0;
-      int counts[5] = {0, 0, 0, 0, 0};
-      double nearest[5] = {kInf, kInf, kInf, kInf, kInf};
-      double zmin = kInf, zmax = -kInf;
-      double amp_sum = 0.0, amp_range = 0.0;
-      for (std::size_t s = 0; s < count; ++s)
-      {
-        const Hit &hit = hits[s];
-        if (hit.t < 0)
-          continue;
-        const double z = hit.t * dirs[s].z ();
-        zmin = std::min (zmin, z);
-        zmax = std::max (zmax, z);
-        const int obj = static_cast<int> (scene.primitives[hit.primitive].object);
-        counts[obj] += static_cast<int> (weight);
-        nearest[obj] = std::min (nearest[obj], z);
-        const double amp = weight * scene.primitives[hit.primitive].reflectivity * hit.cos / (hit.t * hit.t);
-        amp_sum += amp;
-        amp_range += amp * hit.t;
-      }
-      // Ground truth.
-      int best = 0;
-      for (int o = 1; o < 5; ++o)
-        if (counts[o] > counts[best] || (counts[o] == counts[best] && counts[o] > 0 && nearest[o] < nearest[best]))
-          best = o;
-      frame.object[i] = counts[best] > 0 ? static_cast<SynthObject> (best) : SynthObject::None;
-      if (centre[i].t > 0)
-      {
-        frame.ideal_z[i] = static_cast<float> (centre[i].t * pixelRay (u, v).z ());
-        frame.primitive[i] = centre[i].primitive;
-      }
-      if (zmin <= zmax)
-      {
-        frame.sample_min_z[i] = static_cast<float> (zmin);
-        frame.sample_max_z[i] = static_cast<float> (zmax);
-      }
-      if (sensor.sensor == SynthSensor::Sr4000)
-      {
-        // Time of flight: the pixel integrates the returns of all its samples, each
-        // weighted by its amplitude (reflectivity * cos / range^2): mixed pixels.
-        const double amplitude = amp_sum / static_cast<double> (hits.size ());
-        if (amp_sum <= 0 || amplitude < sensor.tof_min_amplitude)
-          continue;
-        const double r = amp_range / amp_sum;
-        if (r < sensor.min_range || r > sensor.max_range)
-          continue;
-        range[i] = static_cast<float> (r);
-        amplitudes[i] = static_cast<float> (amplitude);
-      }
-      else
-      {
-        const Hit &hit = centre[i];
-        if (hit.t < 0 || hit.cos < sensor.kinect_min_cos)
-          continue;
-        const double z = hit.t * dirs[0].z ();
-        if (z < sensor.min_range || z > sensor.max_range)
-          continue;
-        range[i] = static_cast<float> (hit.t);
-      }
+      const int uu = std::clamp (u + du, 0, w - 1), vv = std::clamp (v + dv, 0, h - 1);
+      if (centre[static_cast<std::size_t> (vv) * w + uu].primitive != centre[i].primitive)
+        return false;
     }
+  return true;
+}
 
-  if (sensor.sensor == SynthSensor::Sr4000)
+/** The samples a pixel integrates: hits[0..count) along dirs[0..count), each standing
+  * for `weight` of the ss x ss samples. */
+struct PixelSamples
+{
+  std::vector<Hit> hits;
+  std::vector<Eigen::Vector3d> dirs;
+  std::size_t count = 1;
+  double weight = 1.0;
+  bool uniform = true;  ///< the centre sample stands for all of them
+
+  explicit PixelSamples (int ss) : hits (static_cast<std::size_t> (ss) * ss), dirs (hits.size ()) {}
+};
+
+/** Pass 2 for one pixel: ss x ss samples where the centre rays of the pixel and its 8
+  * neighbours do not all see the same primitive; elsewhere the centre sample stands for
+  * all of them (a smooth surface averages to its centre value). */
+void
+samplePixel (const Binner &binner, const std::vector<Hit> &centre, const PixelRays &ray, int u, int v, int w, int h,
+             int ss, PixelSamples &samples)
+{
+  const std::size_t i = static_cast<std::size_t> (v) * w + u;
+  const Eigen::Vector3d origin = Eigen::Vector3d::Zero ();
+  samples.uniform = ss <= 1 || neighboursSeeTheSamePrimitive (centre, u, v, w, h);
+  samples.count = 1;
+  if (samples.uniform)
   {
-    for (int v = 0; v < h; ++v)
-      for (int u = 0; u < w; ++u)
-      {
-        const std::size_t i = static_cast<std::size_t> (v) * w + u;
-        if (!std::isfinite (range[i]))
-          continue;
-        const double noise = rng.normal ();
-        const double amplitude = amplitudes[i];
-        const double sigma = std::min (sensor.tof_sigma0 + sensor.tof_sigma_k / amplitude, sensor.tof_sigma_max);
-        const double r = range[i] + sigma * noise;
-        const Eigen::Vector3d d = Eigen::Vector3d ((u - k.cx) / k.fx, (v - k.cy) / k.fy, 1.0).normalized ();
-        const double z = r * d.z ();
-        frame.cloud.points[i] = pcl::PointXYZ (static_cast<float> ((u - k.cx) * z / k.fx),
-                                               static_cast<float> ((v - k.cy) * z / k.fy), static_cast<float> (z));
-      }
-    return;
+    samples.hits[0] = centre[i];
+    samples.dirs[0] = ray (u, v);
   }
+  else
+  {
+    samples.count = samples.hits.size ();
+    for (int sy = 0; sy < ss; ++sy)
+      for (int sx = 0; sx < ss; ++sx)
+      {
+        const std::size_t s = static_cast<std::size_t> (sy) * ss + sx;
+        const double ou = (sx + 0.5) / ss - 0.5, ov = (sy + 0.5) / ss - 0.5;
+        samples.dirs[s] = ray (u + ou, v + ov);
+        samples.hits[s] = (ou == 0.0 && ov == 0.0) ? centre[i] : binner.trace (u, v, origin, samples.dirs[s], true);
+      }
+  }
+  samples.weight = samples.uniform ? static_cast<double> (samples.hits.size ()) : 1.0;
+}
 
-  // Kinect: projector shadows, holes at depth edges, disparity quantisation.
-  const double fb8 = 8.0 * sensor.kinect_f_ir * sensor.kinect_baseline;
-  const Eigen::Vector3d projector (sensor.kinect_baseline, 0.0, 0.0);
-  // The segment from the projector (at +x) to a point seen at pixel u runs along the
-  // pixel's row to the right, so an occluder at depth z_o shadows pixels up to
-  // f b / z_o to its left: widen the occluders' bins to the left by that.
-  const Binner shadow_bins (scene, sensor, 0.0, k.fx * sensor.kinect_baseline);
-  std::vector<float> z (n, kNaN);
+/** What a pixel's samples add up to: hits per object class, the nearest depth per
+  * class, the depth range, and the amplitude sums of the time-of-flight blend. */
+struct PixelIntegral
+{
+  int counts[5] = {0, 0, 0, 0, 0};
+  double nearest[5] = {kInf, kInf, kInf, kInf, kInf};
+  double zmin = kInf, zmax = -kInf;
+  double amp_sum = 0.0, amp_range = 0.0;
+};
+
+PixelIntegral
+integratePixel (const SynthScene &scene, const PixelSamples &samples)
+{
+  PixelIntegral sum;
+  for (std::size_t s = 0; s < samples.count; ++s)
+  {
+    const Hit &hit = samples.hits[s];
+    if (hit.t < 0)
+      continue;
+    const double z = hit.t * samples.dirs[s].z ();
+    sum.zmin = std::min (sum.zmin, z);
+    sum.zmax = std::max (sum.zmax, z);
+    const int obj = static_cast<int> (scene.primitives[hit.primitive].object);
+    sum.counts[obj] += static_cast<int> (samples.weight);
+    sum.nearest[obj] = std::min (sum.nearest[obj], z);
+    const double amp = samples.weight * scene.primitives[hit.primitive].reflectivity * hit.cos / (hit.t * hit.t);
+    sum.amp_sum += amp;
+    sum.amp_range += amp * hit.t;
+  }
+  return sum;
+}
+
+/** The noise-free ground truth of pixel i: the object most samples hit (ties: the
+  * nearer), the centre ray's depth and primitive, the samples' depth range. */
+void
+recordGroundTruth (const PixelIntegral &sum, const Hit &centre, const Eigen::Vector3d &centre_ray, std::size_t i,
+                   SynthFrame &frame)
+{
+  int best = 0;
+  for (int o = 1; o < 5; ++o)
+    if (sum.counts[o] > sum.counts[best] ||
+        (sum.counts[o] == sum.counts[best] && sum.counts[o] > 0 && sum.nearest[o] < sum.nearest[best]))
+      best = o;
+  frame.object[i] = sum.counts[best] > 0 ? static_cast<SynthObject> (best) : SynthObject::None;
+  if (centre.t > 0)
+  {
+    frame.ideal_z[i] = static_cast<float> (centre.t * centre_ray.z ());
+    frame.primitive[i] = centre.primitive;
+  }
+  if (sum.zmin <= sum.zmax)
+  {
+    frame.sample_min_z[i] = static_cast<float> (sum.zmin);
+    frame.sample_max_z[i] = static_cast<float> (sum.zmax);
+  }
+}
+
+/** Time of flight: the pixel integrates the returns of all its samples, each weighted
+  * by its amplitude (reflectivity * cos / range^2): mixed pixels. False (no
+  * measurement) below the confidence cut or outside the range. */
+bool
+measureTimeOfFlight (const PixelIntegral &sum, std::size_t samples, const SensorModel &sensor, float &range,
+                     float &amplitude)
+{
+  const double a = sum.amp_sum / static_cast<double> (samples);
+  if (sum.amp_sum <= 0 || a < sensor.tof_min_amplitude)
+    return false;
+  const double r = sum.amp_range / sum.amp_sum;
+  if (r < sensor.min_range || r > sensor.max_range)
+    return false;
+  range = static_cast<float> (r);
+  amplitude = static_cast<float> (a);
+  return true;
+}
+
+/** Structured light: the centre ray's range, if the surface is not too oblique and its
+  * depth in range. */
+bool
+measureStructuredLight (const Hit &centre, const Eigen::Vector3d &centre_ray, const SensorModel &sensor, float &range)
+{
+  if (centre.t < 0 || centre.cos < sensor.kinect_min_cos)
+    return false;
+  const double z = centre.t * centre_ray.z ();
+  if (z < sensor.min_range || z > sensor.max_range)
+    return false;
+  range = static_cast<float> (centre.t);
+  return true;
+}
+
+/** Labels pixel i with the part and person of the surface a hit shows (nothing for the
+  * room or a miss). */
+void
+labelPixel (const SynthScene &scene, const Hit &hit, std::size_t i, SynthFrame &frame)
+{
+  if (hit.t < 0)
+    return;
+  const SynthPrimitive &p = scene.primitives[static_cast<std::size_t> (hit.primitive)];
+  const SynthPart part = p.partAt (hit.triangle);
+  if (part == SynthPart::None)
+    return;
+  frame.part_label[i] = static_cast<std::uint8_t> (part);
+  frame.person_label[i] = std::max<std::uint8_t> (1, p.person);
+}
+
+/** Time of flight: the surface a blended range shows, the sample whose range is nearest
+  * to it, if within 1 cm + 1% of the range; null for a flying pixel between surfaces. */
+const Hit *
+surfaceAtBlendedRange (const PixelSamples &samples, double range)
+{
+  const Hit *best = nullptr;
+  double best_gap = kInf;
+  for (std::size_t s = 0; s < samples.count; ++s)
+  {
+    const Hit &hit = samples.hits[s];
+    if (hit.t < 0)
+      continue;
+    const double gap = std::abs (hit.t - range);
+    if (gap < best_gap)
+    {
+      best_gap = gap;
+      best = &hit;
+    }
+  }
+  return best_gap <= 0.01 + 0.01 * range ? best : nullptr;
+}
+
+/** No label where the sensor gave no depth. */
+void
+clearLabelsWithoutDepth (SynthFrame &frame)
+{
+  for (std::size_t i = 0; i < frame.part_label.size (); ++i)
+    if (!std::isfinite (frame.cloud.points[i].z))
+      frame.part_label[i] = frame.person_label[i] = 0;
+}
+
+/** The point at range r along pixel (u, v)'s ray, as agex::depthImageToCloud places it. */
+pcl::PointXYZ
+pointOnPixelRay (const CameraIntrinsics &k, int u, int v, double z)
+{
+  return pcl::PointXYZ (static_cast<float> ((u - k.cx) * z / k.fx), static_cast<float> ((v - k.cy) * z / k.fy),
+                        static_cast<float> (z));
+}
+
+/** sr4000: range noise along the ray, growing as the amplitude falls. */
+void
+addTimeOfFlightNoise (const std::vector<float> &range, const std::vector<float> &amplitudes, const SensorModel &sensor,
+                      SynthRng &rng, SynthFrame &frame)
+{
+  const CameraIntrinsics &k = sensor.intrinsics;
+  const int w = sensor.width, h = sensor.height;
   for (int v = 0; v < h; ++v)
     for (int u = 0; u < w; ++u)
     {
       const std::size_t i = static_cast<std::size_t> (v) * w + u;
       if (!std::isfinite (range[i]))
         continue;
-      const Eigen::Vector3d d = pixelRay (u, v);
+      const double noise = rng.normal ();
+      const double amplitude = amplitudes[i];
+      const double sigma = std::min (sensor.tof_sigma0 + sensor.tof_sigma_k / amplitude, sensor.tof_sigma_max);
+      const double r = range[i] + sigma * noise;
+      const Eigen::Vector3d d = Eigen::Vector3d ((u - k.cx) / k.fx, (v - k.cy) / k.fy, 1.0).normalized ();
+      frame.cloud.points[i] = pointOnPixelRay (k, u, v, r * d.z ());
+    }
+}
+
+/** Kinect projector shadows: the depth (z) of every measured pixel that the projector
+  * (kinect_baseline to the camera's right, +x) lights, NaN for the others. */
+std::vector<float>
+projectorLitDepth (const SynthScene &scene, const SensorModel &sensor, const PixelRays &ray,
+                   const std::vector<float> &range)
+{
+  const int w = sensor.width, h = sensor.height;
+  const Eigen::Vector3d projector (sensor.kinect_baseline, 0.0, 0.0);
+  // The segment from the projector (at +x) to a point seen at pixel u runs along the
+  // pixel's row to the right, so an occluder at depth z_o shadows pixels up to
+  // f b / z_o to its left: widen the occluders' bins to the left by that.
+  const Binner shadow_bins (scene, sensor, 0.0, sensor.intrinsics.fx * sensor.kinect_baseline);
+  std::vector<float> z (range.size (), kNaN);
+  for (int v = 0; v < h; ++v)
+    for (int u = 0; u < w; ++u)
+    {
+      const std::size_t i = static_cast<std::size_t> (v) * w + u;
+      if (!std::isfinite (range[i]))
+        continue;
+      const Eigen::Vector3d d = ray (u, v);
       const Eigen::Vector3d p = d * range[i];
       if (!shadow_bins.anyAt (u, v))
       {
@@ -1179,13 +1337,20 @@ renderScene (const SynthScene &scene, const SensorModel &sensor, SynthRng &rng, 
         continue;
       z[i] = static_cast<float> (p.z ());
     }
-  // Depth edges on the noise-free depth (nothing hit counts as far).
-  std::vector<std::uint8_t> edge (n, 0);
+  return z;
+}
+
+/** Depth edges on the noise-free depth: a 4-neighbour more than 4 cm + 3% of the depth
+  * away, or nothing (which counts as far). */
+std::vector<std::uint8_t>
+depthEdges (const std::vector<float> &ideal_z, int w, int h)
+{
+  std::vector<std::uint8_t> edge (ideal_z.size (), 0);
   for (int v = 0; v < h; ++v)
     for (int u = 0; u < w; ++u)
     {
       const std::size_t i = static_cast<std::size_t> (v) * w + u;
-      const float zi = frame.ideal_z[i];
+      const float zi = ideal_z[i];
       if (!std::isfinite (zi))
         continue;
       const int du[4] = {1, -1, 0, 0}, dv[4] = {0, 0, 1, -1};
@@ -1194,7 +1359,7 @@ renderScene (const SynthScene &scene, const SensorModel &sensor, SynthRng &rng, 
         const int uu = u + du[q], vv = v + dv[q];
         if (uu < 0 || vv < 0 || uu >= w || vv >= h)
           continue;
-        const float zj = frame.ideal_z[static_cast<std::size_t> (vv) * w + uu];
+        const float zj = ideal_z[static_cast<std::size_t> (vv) * w + uu];
         if (!std::isfinite (zj) || std::abs (zj - zi) > 0.04 + 0.03 * zi)
         {
           edge[i] = 1;
@@ -1202,24 +1367,38 @@ renderScene (const SynthScene &scene, const SensorModel &sensor, SynthRng &rng, 
         }
       }
     }
+  return edge;
+}
+
+/** True if a pixel of the 3x3 window around (u, v) is a depth edge. */
+bool
+besideAnEdge (const std::vector<std::uint8_t> &edge, int u, int v, int w, int h)
+{
+  for (int dv = -1; dv <= 1; ++dv)
+    for (int du = -1; du <= 1; ++du)
+    {
+      const int uu = u + du, vv = v + dv;
+      if (uu >= 0 && vv >= 0 && uu < w && vv < h && edge[static_cast<std::size_t> (vv) * w + uu])
+        return true;
+    }
+  return false;
+}
+
+/** Kinect: holes at depth edges, then disparity noise and quantisation in 1/8 pixel. */
+void
+dropEdgesAndQuantiseDisparity (const std::vector<float> &z, const std::vector<std::uint8_t> &edge,
+                               const SensorModel &sensor, SynthRng &rng, SynthFrame &frame)
+{
+  const CameraIntrinsics &k = sensor.intrinsics;
+  const int w = sensor.width, h = sensor.height;
+  const double fb8 = 8.0 * sensor.kinect_f_ir * sensor.kinect_baseline;
   for (int v = 0; v < h; ++v)
     for (int u = 0; u < w; ++u)
     {
       const std::size_t i = static_cast<std::size_t> (v) * w + u;
       if (!std::isfinite (z[i]))
         continue;
-      bool near_edge = false;
-      if (!edge[i])
-        for (int dv = -1; dv <= 1 && !near_edge; ++dv)
-          for (int du = -1; du <= 1; ++du)
-          {
-            const int uu = u + du, vv = v + dv;
-            if (uu >= 0 && vv >= 0 && uu < w && vv < h && edge[static_cast<std::size_t> (vv) * w + uu])
-            {
-              near_edge = true;
-              break;
-            }
-          }
+      const bool near_edge = !edge[i] && besideAnEdge (edge, u, v, w, h);
       if ((edge[i] && rng.uniform () < sensor.kinect_edge_drop) ||
           (near_edge && rng.uniform () < sensor.kinect_edge_drop_near))
         continue;
@@ -1229,9 +1408,59 @@ renderScene (const SynthScene &scene, const SensorModel &sensor, SynthRng &rng, 
       const double zq = fb8 / q;
       if (zq < sensor.min_range || zq > sensor.max_range)
         continue;
-      frame.cloud.points[i] = pcl::PointXYZ (static_cast<float> ((u - k.cx) * zq / k.fx),
-                                             static_cast<float> ((v - k.cy) * zq / k.fy), static_cast<float> (zq));
+      frame.cloud.points[i] = pointOnPixelRay (k, u, v, zq);
     }
+}
+}  // namespace
+
+void
+renderScene (const SynthScene &scene, const SensorModel &sensor, SynthRng &rng, SynthFrame &frame)
+{
+  if (sensor.sensor == SynthSensor::Bonn)
+    throw std::invalid_argument ("renderScene: bonn frames are rendered with renderSensorModel (SynthSensor::Bonn), "
+                                 "then made into the Bonn view");
+  const int w = sensor.width, h = sensor.height;
+  const std::size_t n = static_cast<std::size_t> (w) * h;
+  const bool tof = sensor.sensor == SynthSensor::Sr4000;
+  const PixelRays ray{sensor.intrinsics};
+  resetFrame (scene, sensor, frame);
+
+  const Binner binner (scene, sensor, 0.0, 0.0);
+  const std::vector<Hit> centre = traceCentreRays (binner, sensor, ray);
+
+  // Pass 2: each pixel's samples give its ground truth and its noise-free measurement.
+  std::vector<float> range (n, kNaN);  // measured range along the pixel-centre ray, before noise
+  std::vector<float> amplitudes (tof ? n : 0, 0.0f);
+  PixelSamples samples (std::max (1, sensor.supersample));
+  for (int v = 0; v < h; ++v)
+    for (int u = 0; u < w; ++u)
+    {
+      const std::size_t i = static_cast<std::size_t> (v) * w + u;
+      samplePixel (binner, centre, ray, u, v, w, h, std::max (1, sensor.supersample), samples);
+      const PixelIntegral sum = integratePixel (scene, samples);
+      recordGroundTruth (sum, centre[i], ray (u, v), i, frame);
+      // The labels are those of the surface the measurement shows.
+      if (tof)
+      {
+        if (measureTimeOfFlight (sum, samples.hits.size (), sensor, range[i], amplitudes[i]))
+          if (const Hit *surface = surfaceAtBlendedRange (samples, range[i]))
+            labelPixel (scene, *surface, i, frame);
+      }
+      else if (measureStructuredLight (centre[i], samples.dirs[0], sensor, range[i]))
+        labelPixel (scene, centre[i], i, frame);
+      if (std::isfinite (range[i]))
+        frame.clean_z[i] = static_cast<float> (range[i] * ray (u, v).z ());
+    }
+
+  if (tof)
+    addTimeOfFlightNoise (range, amplitudes, sensor, rng, frame);
+  else
+  {
+    // Kinect: projector shadows, holes at depth edges, disparity quantisation.
+    const std::vector<float> z = projectorLitDepth (scene, sensor, ray, range);
+    dropEdgesAndQuantiseDisparity (z, depthEdges (frame.ideal_z, w, h), sensor, rng, frame);
+  }
+  clearLabelsWithoutDepth (frame);
 }
 
 int
@@ -1242,6 +1471,15 @@ labelWindow (const SensorModel &sensor)
 
 void
 makeLabels (const BodyModel &body, const SensorModel &sensor, SynthFrame &frame)
+{
+  frame.labels.clear ();
+  frame.label_checks.clear ();
+  appendPersonLabels (body, sensor, 0, 1, frame);
+}
+
+void
+appendPersonLabels (const BodyModel &body, const SensorModel &sensor, int first_primitive, int person,
+                    SynthFrame &frame)
 {
   const CameraIntrinsics &k = sensor.intrinsics;
   const int w = sensor.width, h = sensor.height, win = labelWindow (sensor);
@@ -1256,7 +1494,9 @@ makeLabels (const BodyModel &body, const SensorModel &sensor, SynthFrame &frame)
     const long u = std::lround (px.x ()), v = std::lround (px.y ());
     if (u < 0 || v < 0 || u >= w || v >= h)
       return false;
-    const std::vector<int> &own = body.tip_primitives[index];
+    std::vector<int> own = body.tip_primitives[index];
+    for (int &p : own)
+      p += first_primitive;
     for (long vv = std::max (0L, v - win); vv <= std::min<long> (h - 1, v + win); ++vv)
       for (long uu = std::max (0L, u - win); uu <= std::min<long> (w - 1, u + win); ++uu)
       {
@@ -1279,10 +1519,12 @@ makeLabels (const BodyModel &body, const SensorModel &sensor, SynthFrame &frame)
     if (!l.tip_px.allFinite () || !l.base_px.allFinite ())  // never: guards labels.csv against NaN pixels
       l.tip_px = l.base_px = Eigen::Vector2f (-1.0f, -1.0f);
     l.keyframe = true;
-    return std::make_pair (l, SynthLabelCheck{body.tip_primitives[index], body.tip_tolerance[index]});
+    l.person = person;
+    SynthLabelCheck check{body.tip_primitives[index], body.tip_tolerance[index]};
+    for (int &p : check.primitives)
+      p += first_primitive;
+    return std::make_pair (l, check);
   };
-  frame.labels.clear ();
-  frame.label_checks.clear ();
   auto push = [&] (const std::pair<PartLabel, SynthLabelCheck> &l) {
     frame.labels.push_back (l.first);
     frame.label_checks.push_back (l.second);
@@ -1351,16 +1593,39 @@ toBonnView (const SensorModel &kinect, const SensorModel &bonn, SynthFrame &fram
   resample (frame.ideal_z);
   resample (frame.sample_min_z);
   resample (frame.sample_max_z);
+  resample (frame.clean_z);
+  resample (frame.part_label);
+  resample (frame.person_label);
+  clearLabelsWithoutDepth (frame);  // the 8-bit depth steps drop some
 }
 }  // namespace
 
-SynthGenerator::SynthGenerator (const SynthOptions &options)
-  : options_ (options), sensor_ (sensorModel (options.sensor)), render_sensor_ (renderSensorModel (options.sensor))
+namespace
 {
+/** Distances left at 0: 1.5-3.5 m for one person (aimed at), 0.8-6 m for several. */
+SynthOptions
+withDefaultDistances (SynthOptions options)
+{
+  const bool several = options.people > 1;
+  if (options.min_distance == 0.0)
+    options.min_distance = several ? 0.8 : 1.5;
+  if (options.max_distance == 0.0)
+    options.max_distance = several ? 6.0 : 3.5;
+  return options;
+}
+}  // namespace
+
+SynthGenerator::SynthGenerator (const SynthOptions &options_in)
+  : options_ (withDefaultDistances (options_in)), sensor_ (sensorModel (options_in.sensor)),
+    render_sensor_ (renderSensorModel (options_in.sensor))
+{
+  const SynthOptions &options = options_;
   if (options.motion_files.empty ())
     throw std::invalid_argument ("no motion files given");
   if (options.subjects < 1)
     throw std::invalid_argument ("the number of subjects must be at least 1");
+  if (options.people < 1 || options.people > 4)
+    throw std::invalid_argument ("the number of people per frame must be 1-4, got " + std::to_string (options.people));
   if (!(options.min_distance > 0.3) || options.max_distance < options.min_distance)
     throw std::invalid_argument ("camera distances must satisfy 0.3 < min <= max");
   if (options.max_height < options.min_height)
@@ -1395,8 +1660,535 @@ SynthGenerator::body (int clip, int clip_frame, int subject) const
   return mesh_ ? buildMeshBody (c, clip_frame, params, *mesh_) : buildBody (c, clip_frame, params);
 }
 
+namespace
+{
+/** The camera at `camera` looking at `aim` (Y up: x right, y down, z forward), then
+  * pitched by `pitch` about its x axis and rolled by `roll` about its view axis. */
+Eigen::Isometry3d
+worldToCamera (const Eigen::Vector3d &camera, const Eigen::Vector3d &aim, double roll, double pitch)
+{
+  const Eigen::Vector3d up = Eigen::Vector3d::UnitY ();
+  const Eigen::Vector3d forward = (aim - camera).normalized ();
+  const Eigen::Vector3d right = forward.cross (up).normalized ();
+  const Eigen::Vector3d down = forward.cross (right);
+  Eigen::Matrix3d rotation;
+  rotation.row (0) = right;
+  rotation.row (1) = down;
+  rotation.row (2) = forward;
+  rotation = Eigen::AngleAxisd (roll, Eigen::Vector3d::UnitZ ()).toRotationMatrix () *
+             Eigen::AngleAxisd (pitch, Eigen::Vector3d::UnitX ()).toRotationMatrix () * rotation;
+  Eigen::Isometry3d world_to_camera = Eigen::Isometry3d::Identity ();
+  world_to_camera.linear () = rotation;
+  world_to_camera.translation () = -(rotation * camera);
+  return world_to_camera;
+}
+
+/** Where the room is laid out: on the floor at floor_y, `ahead` the camera's horizontal
+  * view direction, `lateral` to its left; walls and clutter are placed from `anchor`
+  * (on the floor plan) and kept clear of the people's primitives and of the camera. */
+struct RoomFrame
+{
+  Eigen::Vector3d anchor, ahead, lateral, camera;
+  double floor_y = 0.0;
+  const std::vector<SynthPrimitive> *people = nullptr;
+  /** Clutter stands at anchor + ahead * [along_min, wall distance] + lateral * [-across, across]. */
+  double along_min = -1.2, across = 1.8;
+};
+
+/** Moves a wall (normal . x = offset, normal towards the people) behind every person's
+  * primitive. */
+double
+clearOfPeople (const RoomFrame &room, const Eigen::Vector3d &normal, double offset)
+{
+  for (const auto &p : *room.people)
+  {
+    Eigen::Vector3d c;
+    double r;
+    p.boundingSphere (c, r);
+    offset = std::min (offset, normal.dot (c) - r - 0.05);
+  }
+  return offset;
+}
+
+/** Adds the floor, the back wall `wall_behind` beyond the anchor (turned by up to 30
+  * degrees) and, in half the frames, a side wall; returns wall_behind. */
+double
+addFloorAndWalls (SynthRng &rng, const RoomFrame &room, SynthScene &world)
+{
+  const Eigen::Vector3d up = Eigen::Vector3d::UnitY ();
+  SynthPrimitive floor = SynthPrimitive::plane (up, room.floor_y, SynthObject::Floor);
+  floor.reflectivity = static_cast<float> (rng.uniform (0.25, 0.6));
+  world.primitives.push_back (floor);
+
+  const double wall_behind = rng.uniform (0.7, 2.0);
+  const double wall_yaw = rng.uniform (-30.0, 30.0) * M_PI / 180.0;
+  {
+    const Eigen::Vector3d normal = -(Eigen::AngleAxisd (wall_yaw, up) * room.ahead);
+    Eigen::Vector3d at = room.anchor + room.ahead * wall_behind;
+    const double offset = clearOfPeople (room, normal, normal.dot (at));
+    SynthPrimitive wall = SynthPrimitive::plane (normal, offset, SynthObject::Wall);
+    wall.reflectivity = static_cast<float> (rng.uniform (0.5, 0.9));
+    world.primitives.push_back (wall);
+  }
+  const bool side_wall = rng.chance (0.5);
+  const double side_sign = rng.chance (0.5) ? 1.0 : -1.0, side_distance = rng.uniform (1.0, 2.5);
+  const float side_reflectivity = static_cast<float> (rng.uniform (0.5, 0.9));
+  if (side_wall)
+  {
+    const Eigen::Vector3d normal = -side_sign * room.lateral;
+    const double offset =
+        clearOfPeople (room, normal, normal.dot (room.anchor + side_sign * room.lateral * side_distance));
+    if (normal.dot (room.camera) - offset > 0.3)
+    {
+      SynthPrimitive wall = SynthPrimitive::plane (normal, offset, SynthObject::Wall);
+      wall.reflectivity = side_reflectivity;
+      world.primitives.push_back (wall);
+    }
+  }
+  return wall_behind;
+}
+
+/** A spot on the floor for a piece of clutter of the given half diagonal: in the
+  * clutter area, clear of the people (10 cm) and the camera (40 cm), in front of the
+  * walls; false after 20 attempts. */
+bool
+placeClutter (SynthRng &rng, const RoomFrame &room, double wall_behind, const SynthScene &world, double half_diagonal,
+              Eigen::Vector3d &at)
+{
+  for (int attempt = 0; attempt < 20; ++attempt)
+  {
+    // Drawn across first, then along: the order earlier builds evaluated them in.
+    const double across = rng.uniform (-room.across, room.across);
+    const double along = rng.uniform (room.along_min, wall_behind);
+    at = room.anchor + room.ahead * along + room.lateral * across;
+    at.y () = room.floor_y;
+    bool ok = true;
+    for (const auto &p : *room.people)
+    {
+      Eigen::Vector3d c;
+      double r;
+      p.boundingSphere (c, r);
+      const Eigen::Vector2d dxz (c.x () - at.x (), c.z () - at.z ());
+      ok = ok && dxz.norm () > half_diagonal + r + 0.1;
+    }
+    const Eigen::Vector2d to_camera (room.camera.x () - at.x (), room.camera.z () - at.z ());
+    ok = ok && to_camera.norm () > half_diagonal + 0.4;
+    for (const auto &p : world.primitives)  // in front of the walls
+      if (p.object == SynthObject::Wall)
+        ok = ok && p.normal.dot (at) - p.offset > half_diagonal + 0.02;
+    if (ok)
+      return true;
+  }
+  return false;
+}
+
+/** A clutter box turned by `yaw` about the vertical. */
+void
+addClutterBox (SynthScene &world, const Eigen::Vector3d &centre, const Eigen::Vector3d &half, double yaw, float refl)
+{
+  const Eigen::Matrix3d r = Eigen::AngleAxisd (yaw, Eigen::Vector3d::UnitY ()).toRotationMatrix ();
+  SynthPrimitive b = SynthPrimitive::box (centre, r * half.asDiagonal (), SynthObject::Clutter);
+  b.reflectivity = refl;
+  world.primitives.push_back (b);
+}
+
+/** A desk: a top at 0.70-0.76 m on four legs, roughly facing the camera. */
+void
+addDesk (SynthRng &rng, const RoomFrame &room, double wall_behind, SynthScene &world)
+{
+  const Eigen::Vector3d up = Eigen::Vector3d::UnitY ();
+  const double half_z = rng.uniform (0.3, 0.4);  // last first: the order earlier builds used
+  const double half_x = rng.uniform (0.5, 0.8);
+  const Eigen::Vector3d half (half_x, 0.015, half_z);
+  const double top = rng.uniform (0.70, 0.76);
+  const double yaw = std::atan2 (room.ahead.x (), room.ahead.z ()) + rng.uniform (-0.3, 0.3);
+  const float refl = static_cast<float> (rng.uniform (0.3, 0.9));
+  Eigen::Vector3d at;
+  if (!placeClutter (rng, room, wall_behind, world, std::hypot (half.x (), half.z ()), at))
+    return;
+  addClutterBox (world, at + up * (top - half.y ()), half, yaw, refl);
+  const Eigen::Matrix3d r = Eigen::AngleAxisd (yaw, up).toRotationMatrix ();
+  for (const double sx : {-1.0, 1.0})
+    for (const double sz : {-1.0, 1.0})
+    {
+      const Eigen::Vector3d leg = at + r * Eigen::Vector3d (sx * (half.x () - 0.04), 0, sz * (half.z () - 0.04));
+      addClutterBox (world, leg + up * (0.5 * (top - 2 * half.y ())),
+                     Eigen::Vector3d (0.02, 0.5 * (top - 2 * half.y ()), 0.02), yaw, refl);
+    }
+}
+
+/** A box 0.2-0.7 m wide and 0.16-1 m tall standing on the floor. */
+void
+addBox (SynthRng &rng, const RoomFrame &room, double wall_behind, SynthScene &world)
+{
+  const double hz = rng.uniform (0.1, 0.35), hy = rng.uniform (0.08, 0.5), hx = rng.uniform (0.1, 0.35);  // last first
+  const Eigen::Vector3d half (hx, hy, hz);
+  const double yaw = rng.uniform (0.0, M_PI);
+  const float refl = static_cast<float> (rng.uniform (0.3, 0.9));
+  Eigen::Vector3d at;
+  if (placeClutter (rng, room, wall_behind, world, std::hypot (half.x (), half.z ()), at))
+    addClutterBox (world, at + Eigen::Vector3d::UnitY () * half.y (), half, yaw, refl);
+}
+
+/** A chair: a seat 0.4-0.5 m wide at 0.42-0.48 m on four legs, a backrest 0.35-0.5 m
+  * tall, turned at random. */
+void
+addChair (SynthRng &rng, const RoomFrame &room, double wall_behind, SynthScene &world)
+{
+  const Eigen::Vector3d up = Eigen::Vector3d::UnitY ();
+  const double half_w = rng.uniform (0.2, 0.25);
+  const double seat = rng.uniform (0.42, 0.48);
+  const double back = rng.uniform (0.35, 0.5);
+  const double yaw = rng.uniform (0.0, 2.0 * M_PI);
+  const float refl = static_cast<float> (rng.uniform (0.3, 0.9));
+  Eigen::Vector3d at;
+  if (!placeClutter (rng, room, wall_behind, world, std::sqrt (2.0) * half_w, at))
+    return;
+  const Eigen::Matrix3d r = Eigen::AngleAxisd (yaw, up).toRotationMatrix ();
+  const double t = 0.015;  // half the thickness of the seat and the backrest
+  addClutterBox (world, at + up * (seat - t), Eigen::Vector3d (half_w, t, half_w), yaw, refl);
+  for (const double sx : {-1.0, 1.0})
+    for (const double sz : {-1.0, 1.0})
+    {
+      const Eigen::Vector3d leg = at + r * Eigen::Vector3d (sx * (half_w - 0.02), 0, sz * (half_w - 0.02));
+      addClutterBox (world, leg + up * (0.5 * (seat - 2 * t)), Eigen::Vector3d (0.015, 0.5 * (seat - 2 * t), 0.015), yaw,
+                     refl);
+    }
+  addClutterBox (world, at + r * Eigen::Vector3d (0, 0, -(half_w - t)) + up * (seat + 0.5 * back),
+                 Eigen::Vector3d (half_w, 0.5 * back, t), yaw, refl);
+}
+
+/** A shelf facing the camera near the back wall (within 0.6 m of where the wall was
+  * drawn): 0.6-1.2 m wide, 0.3-0.4 m deep, 1.2-2 m tall; two sides, a back, a bottom, a
+  * top and 1-3 boards between. */
+void
+addShelf (SynthRng &rng, const RoomFrame &room, double wall_behind, SynthScene &world)
+{
+  const Eigen::Vector3d up = Eigen::Vector3d::UnitY ();
+  const double half_w = rng.uniform (0.3, 0.6);
+  const double half_d = rng.uniform (0.15, 0.2);
+  const double height = rng.uniform (1.2, 2.0);
+  const int boards = 1 + rng.index (3);
+  const double yaw = std::atan2 (room.ahead.x (), room.ahead.z ()) + rng.uniform (-0.3, 0.3);
+  const float refl = static_cast<float> (rng.uniform (0.3, 0.9));
+  Eigen::Vector3d at;
+  RoomFrame by_the_wall = room;
+  by_the_wall.along_min = wall_behind - 0.6;
+  if (!placeClutter (rng, by_the_wall, wall_behind, world, std::hypot (half_w, half_d), at))
+    return;
+  const Eigen::Matrix3d r = Eigen::AngleAxisd (yaw, up).toRotationMatrix ();  // local +z: away from the camera
+  const double t = 0.01;
+  for (const double sx : {-1.0, 1.0})
+    addClutterBox (world, at + r * Eigen::Vector3d (sx * (half_w - t), 0, 0) + up * (0.5 * height),
+                   Eigen::Vector3d (t, 0.5 * height, half_d), yaw, refl);
+  addClutterBox (world, at + r * Eigen::Vector3d (0, 0, half_d - t) + up * (0.5 * height),
+                 Eigen::Vector3d (half_w - 2 * t, 0.5 * height, t), yaw, refl);
+  for (int b = 0; b <= boards + 1; ++b)
+    addClutterBox (world, at + up * (t + b * (height - 2 * t) / (boards + 1)),
+                   Eigen::Vector3d (half_w - 2 * t, t, half_d - 2 * t), yaw, refl);
+}
+
+/** The clutter of a scene with several people: a desk (30%), 0-2 chairs, a shelf (30%)
+  * and 0-2 boxes. */
+void
+addGroupClutter (SynthRng &rng, const RoomFrame &room, double wall_behind, SynthScene &world)
+{
+  const bool desk = rng.chance (0.3);
+  const int chairs = rng.index (3);
+  const bool shelf = rng.chance (0.3);
+  const int boxes = rng.index (3);
+  if (desk)
+    addDesk (rng, room, wall_behind, world);
+  for (int c = 0; c < chairs; ++c)
+    addChair (rng, room, wall_behind, world);
+  if (shelf)
+    addShelf (rng, room, wall_behind, world);
+  for (int b = 0; b < boxes; ++b)
+    addBox (rng, room, wall_behind, world);
+}
+
+/** How far a body reaches horizontally from its centre (the middle of its torso). */
+double
+horizontalReach (const BodyModel &body)
+{
+  auto off = [&] (const Eigen::Vector3d &p) { return std::hypot (p.x () - body.centre.x (), p.z () - body.centre.z ()); };
+  double reach = 0.0;
+  for (const auto &p : body.primitives)
+  {
+    if (p.shape == SynthPrimitive::Shape::Capsule)
+      reach = std::max (reach, std::max (off (p.a), off (p.b)) + p.radius);
+    else if (p.shape == SynthPrimitive::Shape::Mesh)
+      for (const auto &v : p.mesh->vertices ())
+        reach = std::max (reach, off (p.centre + p.axes * v));
+    else
+    {
+      Eigen::Vector3d c;
+      double r;
+      if (p.boundingSphere (c, r))
+        reach = std::max (reach, off (c) + r);
+    }
+  }
+  return reach;
+}
+
+/** Where a placement stands on the floor plan: the camera at the origin looking along +z,
+  * its right along -x. */
+Eigen::Vector3d
+placementSpot (const SynthPersonPlacement &p)
+{
+  return Eigen::Vector3d (-p.distance * std::sin (p.bearing), 0.0, p.distance * std::cos (p.bearing));
+}
+
+/** Where to put a person whose random spots were all taken: the free spot of a grid over
+  * the ranges (25 cm by 1/14 of the bearings) nearest to the last spot drawn (p, which
+  * it replaces); false if every grid spot is taken. */
+bool
+nearestFreeGridSpot (double min_distance, double max_distance, double max_bearing,
+                     const std::function<bool (const SynthPersonPlacement &)> &free, SynthPersonPlacement &p)
+{
+  const SynthPersonPlacement last = p;
+  double best = kInf;
+  bool found = false;
+  for (double d = min_distance; d <= max_distance + 1e-9; d += 0.25)
+    for (int b = 0; b <= 14; ++b)
+    {
+      SynthPersonPlacement q = last;
+      q.distance = d;
+      q.bearing = max_bearing * (b / 7.0 - 1.0);
+      const double gap = (placementSpot (q) - placementSpot (last)).norm ();
+      if (gap < best && free (q))
+      {
+        best = gap;
+        p = q;
+        found = true;
+      }
+    }
+  return found;
+}
+
+/** The stems of the people's motion files, sorted, without repeats, joined by '+'. */
+std::string
+groupSequence (const std::vector<MotionClip> &clips, const std::vector<SynthPersonPlacement> &people)
+{
+  std::set<std::string> stems;
+  for (const auto &p : people)
+    stems.insert (clips[static_cast<std::size_t> (p.clip)].sequence);
+  std::string sequence;
+  for (const auto &stem : stems)
+    sequence += (sequence.empty () ? "" : "+") + stem;
+  return sequence;
+}
+
+/** The room of a frame: floor, walls, then a desk (a quarter of the frames) or 0-3 boxes. */
+void
+addRoom (SynthRng &rng, const RoomFrame &room, SynthScene &world)
+{
+  const double wall_behind = addFloorAndWalls (rng, room, world);
+  const bool desk = rng.chance (0.25);
+  const int boxes = desk ? 0 : rng.index (4);
+  if (desk)
+    addDesk (rng, room, wall_behind, world);
+  for (int b = 0; b < boxes; ++b)
+    addBox (rng, room, wall_behind, world);
+}
+}  // namespace
+
 SynthFrame
 SynthGenerator::render (std::uint64_t index) const
+{
+  if (options_.people == 1)
+    return renderOne (index);
+  std::vector<BodyModel> bodies;
+  const std::vector<SynthPersonPlacement> people = drawPeople (index, bodies);
+  SynthRng rng = SynthRng::forItem (options_.seed, index);
+  return renderGroup (rng, index, people, &bodies);
+}
+
+SynthFrame
+SynthGenerator::renderPeople (std::uint64_t index, const std::vector<SynthPersonPlacement> &people) const
+{
+  if (people.empty () || people.size () > 255)
+    throw std::invalid_argument ("renderPeople: 1-255 people");
+  for (const auto &p : people)
+    if (p.clip < 0 || p.clip >= static_cast<int> (clips_.size ()) || p.subject < 0 ||
+        p.subject >= static_cast<int> (subjects_.size ()) || p.clip_frame < 0 ||
+        p.clip_frame >= clips_[static_cast<std::size_t> (p.clip)].motion.frameCount () || !std::isfinite (p.distance) ||
+        !std::isfinite (p.bearing) || !std::isfinite (p.facing))
+      throw std::invalid_argument ("renderPeople: a placement's clip, clip frame or subject is out of range, or a "
+                                   "distance or angle is not finite");
+  SynthRng rng = SynthRng::forItem (options_.seed, index);
+  return renderGroup (rng, index, people, nullptr);
+}
+
+std::vector<SynthPersonPlacement>
+SynthGenerator::drawPeople (std::uint64_t index) const
+{
+  std::vector<BodyModel> bodies;
+  return drawPeople (index, bodies);
+}
+
+double
+SynthGenerator::horizontalFieldOfView () const
+{
+  return 2.0 * std::atan (0.5 * sensor_.width / sensor_.intrinsics.fx);
+}
+
+std::vector<SynthPersonPlacement>
+SynthGenerator::drawPeople (std::uint64_t index, std::vector<BodyModel> &bodies) const
+{
+  // A stream of its own, so that renderPeople (i, drawPeople (i)) is render (i).
+  SynthRng rng = SynthRng::forItem (options_.seed ^ 0x9E0913E5A11CE5EDull, index);
+  const double half_fov = 0.5 * horizontalFieldOfView ();
+  std::vector<SynthPersonPlacement> people;
+  std::vector<double> reach;
+  bodies.clear ();
+  auto clear = [&] (const SynthPersonPlacement &p, double r) {
+    for (std::size_t j = 0; j < people.size (); ++j)
+      if ((placementSpot (p) - placementSpot (people[j])).norm () < r + reach[j] + 0.1)
+        return false;
+    return true;
+  };
+  for (int k = 0; k < options_.people; ++k)
+  {
+    SynthPersonPlacement p;
+    p.clip = rng.index (static_cast<int> (clips_.size ()));
+    p.clip_frame = rng.index (clips_[static_cast<std::size_t> (p.clip)].motion.frameCount ());
+    p.subject = rng.index (static_cast<int> (subjects_.size ()));
+    p.facing = rng.uniform (0.0, 2.0 * M_PI);
+    BodyModel body = this->body (p.clip, p.clip_frame, p.subject);
+    const double r = horizontalReach (body);
+    // 40% of the people after the first stand in line with an earlier one (within 0.5 m
+    // of its line of sight), so that one hides part of the other.
+    const bool in_line = k > 0 && rng.chance (0.4);
+    const int other = k > 0 ? rng.index (k) : 0;
+    bool placed = false;
+    for (int attempt = 0; attempt < 50 && !placed; ++attempt)
+    {
+      p.distance = rng.uniform (options_.min_distance, options_.max_distance);
+      if (in_line)
+      {
+        const double lateral = rng.uniform (-0.5, 0.5);
+        p.bearing = people[static_cast<std::size_t> (other)].bearing + lateral / p.distance;
+      }
+      else
+        p.bearing = rng.uniform (-0.85 * half_fov, 0.85 * half_fov);
+      placed = clear (p, r);
+    }
+    if (!placed)  // crowded
+      placed = nearestFreeGridSpot (options_.min_distance, options_.max_distance, 0.85 * half_fov,
+                                    [&] (const SynthPersonPlacement &q) { return clear (q, r); }, p);
+    while (!placed)  // very rare: no room within the ranges; step back along the bearing
+    {
+      p.distance += 0.25;
+      placed = clear (p, r);
+    }
+    people.push_back (p);
+    reach.push_back (r);
+    bodies.push_back (std::move (body));
+  }
+  // Person 1 is the nearest.
+  std::vector<std::size_t> order (people.size ());
+  std::iota (order.begin (), order.end (), 0);
+  std::stable_sort (order.begin (), order.end (),
+                    [&] (std::size_t a, std::size_t b) { return people[a].distance < people[b].distance; });
+  std::vector<SynthPersonPlacement> sorted;
+  std::vector<BodyModel> sorted_bodies;
+  for (const std::size_t i : order)
+  {
+    sorted.push_back (people[i]);
+    sorted_bodies.push_back (std::move (bodies[i]));
+  }
+  bodies = std::move (sorted_bodies);
+  return sorted;
+}
+
+SynthFrame
+SynthGenerator::renderGroup (SynthRng &rng, std::uint64_t index, const std::vector<SynthPersonPlacement> &people,
+                             const std::vector<BodyModel> *bodies) const
+{
+  SynthFrame frame;
+  frame.people = people;
+  frame.clip = people.front ().clip;
+  frame.clip_frame = people.front ().clip_frame;
+  frame.subject = people.front ().subject;
+  frame.sequence = groupSequence (clips_, people);
+  const Eigen::Vector3d up = Eigen::Vector3d::UnitY ();
+
+  // The people on the floor plan (floor at y = 0): each body turned by its facing about
+  // the vertical through its torso, which stands at its spot.
+  std::vector<BodyModel> placed;
+  std::vector<SynthPrimitive> people_primitives;
+  std::vector<int> first_primitive;
+  double mid_height = 0.0, mean_distance = 0.0, farthest = 0.0;
+  for (std::size_t k = 0; k < people.size (); ++k)
+  {
+    const SynthPersonPlacement &p = people[k];
+    const BodyModel body = bodies ? (*bodies)[k] : this->body (p.clip, p.clip_frame, p.subject);
+    const double floor_y = floor_[static_cast<std::size_t> (p.clip)][static_cast<std::size_t> (p.subject)];
+    const Eigen::Isometry3d to_plan = Eigen::Translation3d (placementSpot (p)) * Eigen::AngleAxisd (p.facing, up) *
+                                      Eigen::Translation3d (-body.centre.x (), -floor_y, -body.centre.z ());
+    placed.push_back (body.transformed (to_plan));
+    first_primitive.push_back (static_cast<int> (people_primitives.size ()));
+    for (SynthPrimitive prim : placed.back ().primitives)
+    {
+      prim.person = static_cast<std::uint8_t> (k + 1);
+      people_primitives.push_back (std::move (prim));
+    }
+    mid_height += 0.5 * (body.lowest + body.highest) - floor_y;
+    mean_distance += p.distance;
+    farthest = std::max (farthest, placementSpot (p).z ());
+  }
+  mid_height /= static_cast<double> (people.size ());
+  mean_distance /= static_cast<double> (people.size ());
+
+  // The camera at the floor plan's origin, aimed along +z at the people's mean distance
+  // and middle height, with a jitter (pan sigma ~3 degrees, 10 cm up or down), roll and pitch.
+  const double height = rng.uniform (options_.min_height, options_.max_height);
+  const Eigen::Vector3d camera (0.0, height, 0.0);
+  Eigen::Vector3d aim (0.0, mid_height, mean_distance);
+  aim.x () += rng.normal (0.0, 0.05 * mean_distance);
+  aim.y () += rng.normal (0.0, 0.1);
+  const double roll = rng.normal (0.0, 3.0) * M_PI / 180.0, pitch = rng.normal (0.0, 2.0) * M_PI / 180.0;
+  frame.world_to_camera = worldToCamera (camera, aim, roll, pitch);
+
+  // The room: walls behind the farthest person, clutter from 0.8 m in front of the
+  // camera to the back wall, across the field of view.
+  SynthScene world;
+  world.primitives = people_primitives;
+  RoomFrame room;
+  room.ahead = aim - camera;
+  room.ahead.y () = 0.0;
+  room.ahead.normalize ();
+  room.lateral = up.cross (room.ahead);
+  room.camera = camera;
+  room.floor_y = 0.0;
+  room.anchor = room.ahead * farthest;
+  room.people = &people_primitives;
+  room.along_min = -(farthest - 0.8);
+  room.across = std::max (1.8, (farthest + 1.0) * std::tan (0.5 * horizontalFieldOfView ()) + 0.5);
+  const double wall_behind = addFloorAndWalls (rng, room, world);
+  if (options_.clutter)
+    addGroupClutter (rng, room, wall_behind, world);
+
+  const SynthScene scene = world.transformed (frame.world_to_camera);
+  renderScene (scene, render_sensor_, rng, frame);
+  if (options_.colour)
+  {
+    SynthRng colour_rng = SynthRng::forItem (options_.seed ^ 0xC0105EEDC0105EEDull, index);
+    shadeColour (render_sensor_, colour_rng, frame);
+  }
+  if (options_.sensor == SynthSensor::Bonn)
+    toBonnView (render_sensor_, sensor_, frame);
+  frame.labels.clear ();
+  frame.label_checks.clear ();
+  for (std::size_t k = 0; k < placed.size (); ++k)
+    appendPersonLabels (placed[k].transformed (frame.world_to_camera), sensor_, first_primitive[k],
+                        static_cast<int> (k + 1), frame);
+  return frame;
+}
+
+SynthFrame
+SynthGenerator::renderOne (std::uint64_t index) const
 {
   SynthRng rng = SynthRng::forItem (options_.seed, index);
   SynthFrame frame;
@@ -1407,7 +2199,6 @@ SynthGenerator::render (std::uint64_t index) const
   frame.sequence = clip.sequence;
   const BodyModel body = this->body (frame.clip, frame.clip_frame, frame.subject);
   const double floor_y = floor_[frame.clip][frame.subject];
-  const Eigen::Vector3d up = Eigen::Vector3d::UnitY ();
 
   // Camera: around the person at a random azimuth, distance and height, aimed at the
   // torso with a jitter (sometimes a large one, so the person leaves the frame).
@@ -1421,132 +2212,27 @@ SynthGenerator::render (std::uint64_t index) const
   aim.x () += rng.normal (0.0, jitter);
   aim.y () += rng.normal (0.0, jitter);
   aim.z () += rng.normal (0.0, jitter);
-  const Eigen::Vector3d forward = (aim - camera).normalized ();
-  const Eigen::Vector3d right = forward.cross (up).normalized ();
-  const Eigen::Vector3d down = forward.cross (right);
-  Eigen::Matrix3d rotation;
-  rotation.row (0) = right;
-  rotation.row (1) = down;
-  rotation.row (2) = forward;
   const double roll = rng.normal (0.0, 3.0) * M_PI / 180.0, pitch = rng.normal (0.0, 2.0) * M_PI / 180.0;
-  rotation = Eigen::AngleAxisd (roll, Eigen::Vector3d::UnitZ ()).toRotationMatrix () *
-             Eigen::AngleAxisd (pitch, Eigen::Vector3d::UnitX ()).toRotationMatrix () * rotation;
-  Eigen::Isometry3d world_to_camera = Eigen::Isometry3d::Identity ();
-  world_to_camera.linear () = rotation;
-  world_to_camera.translation () = -(rotation * camera);
-  frame.world_to_camera = world_to_camera;
+  frame.world_to_camera = worldToCamera (camera, aim, roll, pitch);
 
   // The room: floor, back wall behind the person, maybe a side wall, clutter.
   SynthScene world;
   world.primitives = body.primitives;
-  auto clearOfBody = [&] (const Eigen::Vector3d &normal, double offset) {
-    // Moves a wall (normal . x = offset, normal towards the person) behind every body part.
-    for (const auto &p : body.primitives)
-    {
-      Eigen::Vector3d c;
-      double r;
-      p.boundingSphere (c, r);
-      offset = std::min (offset, normal.dot (c) - r - 0.05);
-    }
-    return offset;
-  };
-  SynthPrimitive floor = SynthPrimitive::plane (up, floor_y, SynthObject::Floor);
-  floor.reflectivity = static_cast<float> (rng.uniform (0.25, 0.6));
-  world.primitives.push_back (floor);
+  RoomFrame room;
+  room.anchor = body.centre;
+  room.ahead = aim - camera;
+  room.ahead.y () = 0.0;
+  room.ahead.normalize ();
+  room.lateral = Eigen::Vector3d::UnitY ().cross (room.ahead);  // to the camera's left
+  room.camera = camera;
+  room.floor_y = floor_y;
+  room.people = &body.primitives;
+  if (options_.clutter)
+    addRoom (rng, room, world);
+  else
+    addFloorAndWalls (rng, room, world);
 
-  Eigen::Vector3d ahead = aim - camera;
-  ahead.y () = 0.0;
-  ahead.normalize ();
-  const Eigen::Vector3d lateral = up.cross (ahead);  // to the camera's left
-  const double wall_behind = rng.uniform (0.7, 2.0);
-  const double wall_yaw = rng.uniform (-30.0, 30.0) * M_PI / 180.0;
-  {
-    const Eigen::Vector3d normal = -(Eigen::AngleAxisd (wall_yaw, up) * ahead);
-    Eigen::Vector3d at = body.centre + ahead * wall_behind;
-    const double offset = clearOfBody (normal, normal.dot (at));
-    SynthPrimitive wall = SynthPrimitive::plane (normal, offset, SynthObject::Wall);
-    wall.reflectivity = static_cast<float> (rng.uniform (0.5, 0.9));
-    world.primitives.push_back (wall);
-  }
-  const bool side_wall = rng.chance (0.5);
-  const double side_sign = rng.chance (0.5) ? 1.0 : -1.0, side_distance = rng.uniform (1.0, 2.5);
-  const float side_reflectivity = static_cast<float> (rng.uniform (0.5, 0.9));
-  if (side_wall)
-  {
-    const Eigen::Vector3d normal = -side_sign * lateral;
-    const double offset = clearOfBody (normal, normal.dot (body.centre + side_sign * lateral * side_distance));
-    if (normal.dot (camera) - offset > 0.3)
-    {
-      SynthPrimitive wall = SynthPrimitive::plane (normal, offset, SynthObject::Wall);
-      wall.reflectivity = side_reflectivity;
-      world.primitives.push_back (wall);
-    }
-  }
-  // Clutter: a desk or up to three boxes standing on the floor, clear of the person
-  // and the camera.
-  const bool desk = rng.chance (0.25);
-  const int boxes = desk ? 0 : rng.index (4);
-  auto place = [&] (double half_diagonal, Eigen::Vector3d &at) {
-    for (int attempt = 0; attempt < 20; ++attempt)
-    {
-      at = body.centre + ahead * rng.uniform (-1.2, wall_behind) + lateral * rng.uniform (-1.8, 1.8);
-      at.y () = floor_y;
-      bool ok = true;
-      for (const auto &p : body.primitives)
-      {
-        Eigen::Vector3d c;
-        double r;
-        p.boundingSphere (c, r);
-        const Eigen::Vector2d dxz (c.x () - at.x (), c.z () - at.z ());
-        ok = ok && dxz.norm () > half_diagonal + r + 0.1;
-      }
-      const Eigen::Vector2d to_camera (camera.x () - at.x (), camera.z () - at.z ());
-      ok = ok && to_camera.norm () > half_diagonal + 0.4;
-      for (const auto &p : world.primitives)  // in front of the walls
-        if (p.object == SynthObject::Wall)
-          ok = ok && p.normal.dot (at) - p.offset > half_diagonal + 0.02;
-      if (ok)
-        return true;
-    }
-    return false;
-  };
-  auto addBox = [&] (const Eigen::Vector3d &centre, const Eigen::Vector3d &half, double yaw, float refl) {
-    const Eigen::Matrix3d r = Eigen::AngleAxisd (yaw, up).toRotationMatrix ();
-    SynthPrimitive b = SynthPrimitive::box (centre, r * half.asDiagonal (), SynthObject::Clutter);
-    b.reflectivity = refl;
-    world.primitives.push_back (b);
-  };
-  if (desk)
-  {
-    const Eigen::Vector3d half (rng.uniform (0.5, 0.8), 0.015, rng.uniform (0.3, 0.4));
-    const double top = rng.uniform (0.70, 0.76);
-    const double yaw = std::atan2 (ahead.x (), ahead.z ()) + rng.uniform (-0.3, 0.3);
-    const float refl = static_cast<float> (rng.uniform (0.3, 0.9));
-    Eigen::Vector3d at;
-    if (place (std::hypot (half.x (), half.z ()), at))
-    {
-      addBox (at + up * (top - half.y ()), half, yaw, refl);
-      const Eigen::Matrix3d r = Eigen::AngleAxisd (yaw, up).toRotationMatrix ();
-      for (const double sx : {-1.0, 1.0})
-        for (const double sz : {-1.0, 1.0})
-        {
-          const Eigen::Vector3d leg = at + r * Eigen::Vector3d (sx * (half.x () - 0.04), 0, sz * (half.z () - 0.04));
-          addBox (leg + up * (0.5 * (top - 2 * half.y ())), Eigen::Vector3d (0.02, 0.5 * (top - 2 * half.y ()), 0.02),
-                  yaw, refl);
-        }
-    }
-  }
-  for (int b = 0; b < boxes; ++b)
-  {
-    const Eigen::Vector3d half (rng.uniform (0.1, 0.35), rng.uniform (0.08, 0.5), rng.uniform (0.1, 0.35));
-    const double yaw = rng.uniform (0.0, M_PI);
-    const float refl = static_cast<float> (rng.uniform (0.3, 0.9));
-    Eigen::Vector3d at;
-    if (place (std::hypot (half.x (), half.z ()), at))
-      addBox (at + up * half.y (), half, yaw, refl);
-  }
-
-  const SynthScene scene = world.transformed (world_to_camera);
+  const SynthScene scene = world.transformed (frame.world_to_camera);
   renderScene (scene, render_sensor_, rng, frame);
   if (options_.colour)
   {
@@ -1556,7 +2242,7 @@ SynthGenerator::render (std::uint64_t index) const
   }
   if (options_.sensor == SynthSensor::Bonn)
     toBonnView (render_sensor_, sensor_, frame);
-  makeLabels (body.transformed (world_to_camera), sensor_, frame);
+  makeLabels (body.transformed (frame.world_to_camera), sensor_, frame);
   return frame;
 }
 
@@ -1571,6 +2257,8 @@ SynthGenerator::datasetInfo () const
   info.intrinsics = sensor_.intrinsics;
   info.depth_scale = 1.0;
   info.units = "m";
+  info.part_labels = synthPartNames ();
+  info.person_labels = true;
   std::ostringstream p;
   p << "agex_synth: synthetic " << info.sensor << " frames (" << sensor_.width << "x" << sensor_.height
     << ") of " << (mesh_ ? "MakeHuman mesh bodies (" + options_.body_mesh + ")" : std::string ("capsule/ellipsoid bodies"))
@@ -1579,7 +2267,10 @@ SynthGenerator::datasetInfo () const
     p << " " << clip.motion.path () << " (" << clip.motion.frameCount () << " frames, " << clip.scale << " m/unit"
       << (clip.scale_auto ? " auto" : "") << ")";
   p << "; seed " << options_.seed << "; camera " << options_.min_distance << "-" << options_.max_distance
-    << " m from the body, " << options_.min_height << "-" << options_.max_height << " m high; subjects:";
+    << " m from the body, " << options_.min_height << "-" << options_.max_height << " m high";
+  if (options_.people > 1)
+    p << "; " << options_.people << " people per frame (doc/synthetic.md, \"Several people\")";
+  p << "; subjects:";
   for (std::size_t s = 0; s < subjects_.size (); ++s)
     p << " #" << s << " " << subjects_[s].describe () << (s + 1 < subjects_.size () ? ";" : "");
   p << "; each frame draws (clip, clip frame, subject, camera, room, noise) from its own generator; see "
@@ -1626,6 +2317,10 @@ writeSyntheticDataset (const SynthGenerator &generator, int frames, const std::s
       }
       writer.addFrame (id, frame.sequence, coloured, frame.labels);
     }
+    const int w = generator.sensor ().width, h = generator.sensor ().height;
+    // cv::Mat views of the frame's own buffers (not written to).
+    writer.addPartLabels (id, cv::Mat (h, w, CV_8UC1, const_cast<std::uint8_t *> (frame.part_label.data ())));
+    writer.addPersonLabels (id, cv::Mat (h, w, CV_8UC1, const_cast<std::uint8_t *> (frame.person_label.data ())));
     const auto t2 = clock::now ();
     stats.render_ms += std::chrono::duration<double, std::milli> (t1 - t0).count ();
     stats.write_ms += std::chrono::duration<double, std::milli> (t2 - t1).count ();

@@ -898,7 +898,7 @@ TEST (SynthDataset, SameSeedSameBytesDifferentSeedDifferent)
     return filesOf (dir.path () / name);
   };
   const auto a = run (5, "a"), b = run (5, "b"), c = run (6, "c");
-  ASSERT_EQ (a.size (), 6u);  // dataset.json, labels.csv, 4 frames
+  ASSERT_EQ (a.size (), 14u);  // dataset.json, labels.csv, 4 frames, 4 part-label and 4 person images
   EXPECT_TRUE (a == b) << "the same seed wrote different bytes";
   EXPECT_NE (a.at ("labels.csv"), c.at ("labels.csv"));
   EXPECT_NE (a.at ("frames/000000.pcd"), c.at ("frames/000000.pcd"));

@@ -3,6 +3,8 @@
 // default_weights.mhw) as a skinned body for synthetic frames: the `body` group of the
 // base mesh, its 163-bone skeleton and the skin weights, posed by a CMU motion capture
 // skeleton (doc/synthetic.md, "Mesh bodies").
+#include <agex/simulation/synth_part.h>
+
 #include <Eigen/Core>
 
 #include <array>
@@ -69,6 +71,14 @@ public:
   const std::vector<Part> &parts () const { return parts_; }
   /** The part of each triangle (that of most of its vertices). */
   const std::vector<Part> &triangleParts () const { return triangle_parts_; }
+  /** The per-pixel label part of each bone, by the subtree it lies in: head (and face),
+    * neck, upper arm, forearm, hand (and fingers), thigh, lower leg, foot (and toes);
+    * pelvis for root, pelvis.L/R and spine05; torso for the rest (spine, clavicles,
+    * shoulders, breasts). */
+  const std::vector<SynthPart> &boneLabels () const { return bone_labels_; }
+  /** The per-pixel label part of each triangle: that of the bone with the largest skin
+    * weight summed over the triangle's three corners (ties: the first bone). */
+  const std::vector<SynthPart> &triangleLabels () const { return triangle_labels_; }
   /** Tip vertices of the labelled parts, indexed by Part (-1 for the others): the top
     * of the head, the tip of each middle finger, the front of each foot. */
   const std::array<int, kParts> &tipVertices () const { return tips_; }
@@ -81,6 +91,7 @@ private:
   std::vector<Bone> bones_;
   std::vector<std::vector<Influence>> influences_;
   std::vector<Part> parts_, triangle_parts_;
+  std::vector<SynthPart> bone_labels_, triangle_labels_;
   std::array<int, kParts> tips_{};
   double height_ = 0.0;
 };

@@ -19,9 +19,10 @@ public:
   const std::vector<Eigen::Vector3i> &triangles () const { return triangles_; }
 
   /** \brief Nearest hit at t > t_min along origin + t * direction; sets the unit
-    * normal of the triangle hit, turned towards the ray's origin. -1 if none. */
+    * normal of the triangle hit, turned towards the ray's origin, and the index of that
+    * triangle (into triangles()). -1 if none (normal and triangle left as they are). */
   double intersect (const Eigen::Vector3d &origin, const Eigen::Vector3d &direction, double t_min,
-                    Eigen::Vector3d *normal) const;
+                    Eigen::Vector3d *normal, int *triangle = nullptr) const;
 
   /** Unsigned distance from p to the nearest triangle (+inf for an empty mesh). */
   double distance (const Eigen::Vector3d &p) const;

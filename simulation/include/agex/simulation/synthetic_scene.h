@@ -1,6 +1,7 @@
 #pragma once
-// Synthetic labelled depth frames (doc/synthetic.md): people posed by real motion
-// capture (BVH), a body made of capsules and ellipsoids on the skeleton, a room
+// Synthetic labelled depth frames (doc/synthetic.md): people (one, or up to four apart,
+// partly hiding each other) posed by real motion capture (BVH), a body made of capsules
+// and ellipsoids on the skeleton or the MakeHuman mesh, a room
 // (floor, back wall, optional side wall, clutter boxes or a desk), a randomly
 // placed camera, a ray-casting renderer and two sensor models:
 //   sr4000  144x176 portrait time-of-flight: 3x3 supersampling whose samples are
@@ -9,7 +10,8 @@
 //   kinect  640x480 structured light: disparity quantisation and noise (depth
 //           steps grow with depth^2), projector shadows and holes at depth edges,
 //           no mixed pixels
-// and head / hand / foot tip labels (agex::PartLabel) with a depth-test visibility.
+// head / hand / foot tip labels (agex::PartLabel) with a depth-test visibility, and an
+// exact per-pixel part label (agex::SynthPart) of the surface each depth pixel shows.
 //
 // Everything is a function of the seed: frame i draws from its own generator seeded
 // from (seed, i), with hand-written uniform and normal variates on std::mt19937_64's
@@ -20,6 +22,7 @@
 #include <agex/io/dataset.h>
 #include <agex/io/frame_io.h>
 #include <agex/simulation/synth_mesh.h>
+#include <agex/simulation/synth_part.h>
 
 #include <pcl/point_cloud.h>
 #include <pcl/point_types.h>
@@ -147,6 +150,14 @@ struct SynthPrimitive
   SynthObject object = SynthObject::None;
   float reflectivity = 0.7f;  ///< 0..1, for the time-of-flight amplitude
   SynthMaterial material = SynthMaterial::Default;
+  /** The body part a Person primitive is, for the per-pixel part labels (None: the
+    * label is SynthPart::Unknown, "body, part unknown"). */
+  SynthPart part = SynthPart::None;
+  /** Meshes: the part of each triangle (parallel to mesh->triangles ()), overriding
+    * `part`; null for one part per primitive. */
+  std::shared_ptr<const std::vector<SynthPart>> triangle_parts;
+  /** Which person (1, 2, ...) a Person primitive belongs to, for the person labels. */
+  std::uint8_t person = 1;
   Eigen::Vector3d a = Eigen::Vector3d::Zero (), b = Eigen::Vector3d::Zero ();
   double radius = 0.0;
   Eigen::Vector3d centre = Eigen::Vector3d::Zero ();
@@ -168,9 +179,14 @@ struct SynthPrimitive
   /** Bounding sphere; false for a plane (unbounded). */
   bool boundingSphere (Eigen::Vector3d &centre, double &radius) const;
   /** \brief Nearest ray hit at t > t_min along origin + t * direction (direction of
-    * unit length); sets the outward unit normal. Returns -1 if none. */
+    * unit length); sets the outward unit normal and, for meshes, the triangle hit (-1
+    * for other shapes). Returns -1 if none. */
   double intersect (const Eigen::Vector3d &origin, const Eigen::Vector3d &direction, double t_min,
-                    Eigen::Vector3d *normal) const;
+                    Eigen::Vector3d *normal, int *triangle = nullptr) const;
+  /** The part label of a hit on this primitive (triangle from intersect): the
+    * triangle's part for meshes with triangle_parts, else `part`; Unknown for a Person
+    * primitive without one, None for the room. */
+  SynthPart partAt (int triangle) const;
   /** Approximate signed distance of p to the surface (exact for capsules, boxes and
     * planes, first order for ellipsoids); negative inside. Meshes give the unsigned
     * distance. */
@@ -294,6 +310,17 @@ struct SynthLabelCheck
   double tolerance = 0.05;      ///< metres
 };
 
+/** Where one person of a scene with several (SynthOptions::people > 1) stands and
+  * what they do. The camera stands on the floor plan's origin and looks along its view
+  * direction (before the aim's jitter). */
+struct SynthPersonPlacement
+{
+  int clip = 0, clip_frame = 0, subject = 0;
+  double distance = 2.0;  ///< horizontal, camera to the middle of the torso, metres
+  double bearing = 0.0;   ///< radians from the view direction, positive to the image's right
+  double facing = 0.0;    ///< the body's turn about the vertical, radians
+};
+
 /** A rendered frame, in the camera frame (x right, y down, z forward, metres). */
 struct SynthFrame
 {
@@ -305,16 +332,33 @@ struct SynthFrame
   std::vector<int> primitive;       ///< scene primitive seen at the pixel centre, -1 if none
   std::vector<float> ideal_z;       ///< depth at the pixel centre, NaN if nothing
   std::vector<float> sample_min_z, sample_max_z;  ///< over the pixel's samples (NaN if none hit)
+  /** Depth the sensor measured before its noise, shadows and holes: sr4000, that of the
+    * amplitude-weighted blend of the samples' ranges (along the centre ray); kinect, the
+    * centre ray's. NaN where it measured nothing. */
+  std::vector<float> clean_z;
+  /** Per pixel: the SynthPart of the body surface the pixel's depth shows, 0 for the
+    * room, nothing, or no valid depth (doc/synthetic.md, "Part labels"). */
+  std::vector<std::uint8_t> part_label;
+  /** Per pixel: the person (SynthPrimitive::person, 1, 2, ...) of that surface; 0 where
+    * part_label is 0. */
+  std::vector<std::uint8_t> person_label;
   /** Colour image (row-major r, g, b), filled by shadeColour; empty for depth-only frames. */
   std::vector<std::array<std::uint8_t, 3>> colour;
   SynthScene scene;                 ///< the scene in the camera frame
   Eigen::Isometry3d world_to_camera = Eigen::Isometry3d::Identity ();
-  // What was drawn:
+  // What was drawn (for several people: those of person 1, the nearest):
   int clip = 0, clip_frame = 0, subject = 0;
   std::string sequence;
+  /** Several people: person k + 1 stands at people[k], nearest first; empty for one. */
+  std::vector<SynthPersonPlacement> people;
 };
 
-/** \brief Renders a scene (camera frame) with a sensor model; draws the noise from rng. */
+/** \brief Renders a scene (camera frame) with a sensor model; draws the noise from rng.
+  * Fills the cloud, the per-pixel ground truth and the part and person labels of the
+  * surfaces the depth pixels show: kinect, the surface the pixel-centre ray hits;
+  * sr4000, the surface of the pixel's sample nearest to its (noise-free, blended) range,
+  * if within 1 cm + 1% of the range of it, else none (a flying pixel between surfaces);
+  * none wherever the depth is invalid. */
 void renderScene (const SynthScene &scene, const SensorModel &sensor, SynthRng &rng, SynthFrame &frame);
 
 /** \brief Paints a rendered frame as a colour camera would see it (frame.colour), with
@@ -334,6 +378,12 @@ void shadeColour (const SensorModel &sensor, SynthRng &rng, SynthFrame &frame);
   * image's left (smaller tip u). Fills frame.labels and frame.label_checks. */
 void makeLabels (const BodyModel &body_in_camera, const SensorModel &sensor, SynthFrame &frame);
 
+/** \brief The same for one person of several: appends the five labels of a body whose
+  * primitives start at index first_primitive of frame.scene, with PartLabel::person =
+  * person (and the checks' primitives as scene indices). */
+void appendPersonLabels (const BodyModel &body_in_camera, const SensorModel &sensor, int first_primitive, int person,
+                         SynthFrame &frame);
+
 /** Half size of the label visibility window: 1 (3x3) for sr4000, 2 (5x5) for kinect. */
 int labelWindow (const SensorModel &sensor);
 
@@ -345,7 +395,12 @@ struct SynthOptions
   SynthSensor sensor = SynthSensor::Sr4000;
   std::uint64_t seed = 1;
   int subjects = 4;        ///< body shapes drawn from the seed
-  double min_distance = 1.5, max_distance = 3.5;  ///< camera to body, metres
+  /** People per frame, 1-4. One: the camera is placed around the person and aimed at
+    * them. Several: they stand at random distances and bearings in front of the camera,
+    * partly hiding each other (doc/synthetic.md, "Several people"). */
+  int people = 1;
+  /** Camera to body (each person's), metres; 0: 1.5-3.5 for one person, 0.8-6 for several. */
+  double min_distance = 0.0, max_distance = 0.0;
   double min_height = 0.8, max_height = 1.6;      ///< camera above the floor, metres
   /** A MakeHuman directory (base.obj, default.mhskel, default_weights.mhw) for mesh
     * bodies (buildMeshBody); empty: capsule and ellipsoid bodies (buildBody). */
@@ -353,6 +408,8 @@ struct SynthOptions
   /** Also paint colour frames (shadeColour; sr4000 and kinect only); the depth is the same
     * as without. */
   bool colour = false;
+  /** Desks, chairs, shelves and boxes in the room (walls and the floor always). */
+  bool clutter = true;
 };
 
 /** Draws and renders frames; frame i depends only on the options and i. */
@@ -375,10 +432,26 @@ public:
 
   /** Renders frame `index`. */
   SynthFrame render (std::uint64_t index) const;
+  /** \brief Renders frame `index` with the given people (1-255 of them, person k + 1 at
+    * people[k]) instead of drawn ones; the camera height, its aim, the room and the
+    * noise are drawn from the frame's generator as render() draws them for several people.
+    * \throws std::invalid_argument for a clip, frame or subject out of range */
+  SynthFrame renderPeople (std::uint64_t index, const std::vector<SynthPersonPlacement> &people) const;
+  /** Draws the people of frame `index` as render () does for several (sorted nearest first). */
+  std::vector<SynthPersonPlacement> drawPeople (std::uint64_t index) const;
   /** The dataset description: sensor, size, intrinsics, provenance. */
   DatasetInfo datasetInfo () const;
 
 private:
+  SynthFrame renderOne (std::uint64_t index) const;
+  /** bodies: the people's bodies as body () gives them (null: built here). */
+  SynthFrame renderGroup (SynthRng &rng, std::uint64_t index, const std::vector<SynthPersonPlacement> &people,
+                          const std::vector<BodyModel> *bodies) const;
+  /** Also returns each person's body (as body () gives it), in the placements' order. */
+  std::vector<SynthPersonPlacement> drawPeople (std::uint64_t index, std::vector<BodyModel> &bodies) const;
+  /** Horizontal field of view of the stored frames, radians. */
+  double horizontalFieldOfView () const;
+
   SynthOptions options_;
   SensorModel sensor_, render_sensor_;
   std::vector<MotionClip> clips_;

@@ -192,6 +192,10 @@ check "convert --force onto a regular file" 1 "mine.txt: is a regular file, not 
 check "convert --force onto a directory that is not a dataset" 1 "thesis: is a directory without an agex dataset.json" $C pcd --input in/loss/src --output in/loss/thesis --force
 check "synth --force onto a directory that is not a dataset" 1 "thesis: is a directory without an agex dataset.json" $S --motion in/walk.bvh --frames 2 --output in/loss/thesis --force
 check "synth --force onto a dataset holding a file of someone else" 1 "ds_with_notes: holds notes.txt, which is not part of an agex dataset" $S --motion in/walk.bvh --frames 2 --output in/ds_with_notes --force
+if [ -f "$SRC/../shared/data/mocap/cmu_131_01.bvh" ]; then  # a real motion: its dataset has part and person images
+  $S --motion in/walk.bvh --frames 2 --output out/synth_again >/dev/null 2>&1
+  check "synth --force onto its own earlier dataset" 0 "2 sr4000 frames" $S --motion in/walk.bvh --frames 2 --output out/synth_again --force
+fi
 $C u16 --input in/wall_176x144.u16 $SR --output out/replaced >/dev/null 2>&1
 check "convert --force onto an earlier agex dataset" 0 "1 frames" $C u16 --input in/wall_176x144.u16 $SR --output out/replaced --force
 check "one frame of a dataset, JSON over its labels" 1 "labels.csv: output would (overwrite an input|land inside the input dataset)" $D in/ds_two/frames/a.pcd --json in/ds_two/labels.csv

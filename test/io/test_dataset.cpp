@@ -648,6 +648,23 @@ TEST (DatasetReplacement, OnlyAnEarlierDatasetOfItsOwnFilesMayBeReplaced)
   fs::create_directories (fs::path (ds) / "frames" / "sub");
   EXPECT_NE (agex::datasetReplaceProblem (ds).find ("holds frames/sub"), std::string::npos);
   fs::remove (fs::path (ds) / "frames" / "sub");
+  // A dataset with per-pixel part and person images (agex_synth's) is all its own files.
+  const std::string labelled = tmp.file ("labelled");
+  {
+    agex::DatasetInfo info = smallInfo ();
+    info.part_labels = {{1, "head"}};
+    agex::DatasetWriter writer (labelled, info);
+    writer.addFrame ("f0", "s", smallCloud (0), {});
+    writer.addPartLabels ("f0", cv::Mat (info.height, info.width, CV_8UC1, cv::Scalar (1)));
+    writer.addPersonLabels ("f0", cv::Mat (info.height, info.width, CV_8UC1, cv::Scalar (1)));
+    writer.commit ();
+  }
+  ASSERT_TRUE (fs::exists (fs::path (labelled) / "labels" / "f0.png"));
+  ASSERT_TRUE (fs::exists (fs::path (labelled) / "persons" / "f0.png"));
+  EXPECT_EQ (agex::datasetReplaceProblem (labelled), "");
+  EXPECT_EQ (fs::path (agex::enclosingDataset (labelled + "/labels/f0.png")), fs::canonical (labelled));
+  writeText (fs::path (labelled) / "persons" / "notes.txt", "mine");
+  EXPECT_NE (agex::datasetReplaceProblem (labelled).find ("holds persons/notes.txt"), std::string::npos);
   fs::create_symlink (ds, tmp.file ("link"));
   EXPECT_NE (agex::datasetReplaceProblem (tmp.file ("link")).find ("symbolic link"), std::string::npos);
 

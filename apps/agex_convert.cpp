@@ -4,6 +4,7 @@
 //   agex_convert pcd  --input FILE|DIR... --output DIR
 
 #include <agex/apps/command_line.h>
+#include <agex/apps/output_guard.h>
 #include <agex/apps/pipeline_flags.h>
 #include <agex/detection/depth_pipeline.h>
 #include <agex/io/bonn.h>
@@ -72,6 +73,32 @@ sanitiseId (std::string id)
   return id;
 }
 
+/** The sequence of each file: the name of its directory, exactly (UTF-8). Two different
+  * directories of one name would merge silently (a train and a test sequence), and a name
+  * that cannot be a sequence name is refused rather than changed. */
+std::vector<std::string>
+sequenceNames (const std::vector<fs::path> &files)
+{
+  std::map<std::string, fs::path> directory_of;
+  std::vector<std::string> names;
+  for (const auto &file : files)
+  {
+    std::error_code ec;
+    const fs::path dir = fs::weakly_canonical (fs::absolute (file, ec), ec).parent_path ();
+    const std::string name = dir.filename ().string ();
+    std::string why;
+    if (!agex::validSequenceName (name, &why))
+      throw std::runtime_error (dir.string () + ": the directory name " + why +
+                                "; it would be the frames' sequence name: rename the directory");
+    const auto [it, inserted] = directory_of.emplace (name, dir);
+    if (!inserted && it->second != dir)
+      throw std::runtime_error (it->second.string () + " and " + dir.string () + " would both be sequence '" + name +
+                                "'; convert them into separate datasets or rename one");
+    names.push_back (name);
+  }
+  return names;
+}
+
 int
 convertBonn (const std::string &input, const std::string &output, const std::string &view_name,
              const std::string &sequences_flag, const agex::FrameOptions &options, int label_radius,
@@ -128,6 +155,10 @@ convertBonn (const std::string &input, const std::string &output, const std::str
 
   agex::FrameOptions frame_options = options;
   frame_options.depth_scale = scale;
+  agex::InputFiles read ({input, (root / "labels.csv").string ()});
+  for (const auto &frame : frames)
+    read.add (frame.second.string ());
+  agex::apps::checkOutputPath (output, agex::apps::OutputKind::Dataset, read, force);
   agex::DatasetWriter writer (output, info, force);
   std::size_t lifted = 0, unlifted = 0;
   agex::apps::Progress progress ("converted", frames.size ());
@@ -185,6 +216,11 @@ convertFrames (const std::string &kind, const std::vector<std::string> &inputs, 
                const agex::FrameOptions &options, const std::string &sensor, bool force)
 {
   const std::vector<fs::path> files = collectFiles (inputs, "." + kind);
+  agex::InputFiles read (inputs);
+  for (const auto &file : files)
+    read.add (file.string ());
+  agex::apps::checkOutputPath (output, agex::apps::OutputKind::Dataset, read, force);
+  const std::vector<std::string> sequences = sequenceNames (files);
   agex::DatasetInfo info;
   info.name = output.empty () ? kind : fs::path (output).filename ().string ();
   info.sensor = sensor;
@@ -217,7 +253,7 @@ convertFrames (const std::string &kind, const std::vector<std::string> &inputs, 
     for (int n = 2; ids.count (id); ++n)
       id = sanitiseId (files[i].stem ().string ()) + "-" + std::to_string (n);
     ids.insert (id);
-    writer->addFrame (id, sanitiseId (files[i].parent_path ().filename ().string ()), *frame.cloud, {});
+    writer->addFrame (id, sequences[i], *frame.cloud, {});
     progress.step (i + 1);
   }
   writer->commit ();
@@ -262,9 +298,6 @@ main (int argc, char **argv)
       throw std::runtime_error ("--input and --output are required (see --help)");
     if (label_radius < 0 || !(depth_band > 0.f))
       throw std::runtime_error ("--label-radius must be >= 0 and --label-depth-band > 0");
-    for (const auto &in : inputs)
-      if (fs::exists (output) && fs::exists (in) && fs::equivalent (output, in))
-        throw std::runtime_error (output + ": the output would replace an input");
     if (mode == "bonn")
     {
       if (inputs.size () != 1)

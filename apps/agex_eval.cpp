@@ -284,9 +284,10 @@ compareDetectors (const agex::apps::DatasetSelection &selection, const std::stri
   {
     const auto part = static_cast<agex::BodyPart> (c);
     const std::size_t labels = containment.labelCount (part);
-    const double fraction = containment.coverage (part, kContainmentK);
+    // A class without labels has no fraction (null), and its count stays an integer.
+    const nlohmann::json fraction = labels ? nlohmann::json (containment.coverage (part, kContainmentK)) : nlohmann::json ();
     doc["agex5_containment"][agex::bodyPartName (part)] = {
-        {"contained", static_cast<long> (std::lround (fraction * labels))}, {"labels", labels}, {"fraction", fraction}};
+        {"contained", containment.coveredCount (part, kContainmentK)}, {"labels", labels}, {"fraction", fraction}};
   }
   doc["agex5_containment"]["radius_m"] = radius;
   if (!json_path.empty ())
@@ -306,7 +307,7 @@ compareDetectors (const agex::apps::DatasetSelection &selection, const std::stri
     std::printf ("\n");
   }
   for (const char *part : {"head", "hand", "foot"})
-    std::printf ("  AGEX_5 contains %ld/%zu %s labels\n", doc["agex5_containment"][part]["contained"].get<long> (),
+    std::printf ("  AGEX_5 contains %zu/%zu %s labels\n", doc["agex5_containment"][part]["contained"].get<std::size_t> (),
                  doc["agex5_containment"][part]["labels"].get<std::size_t> (), part);
 
   if (!plots_dir.empty ())

@@ -3,6 +3,8 @@
 // writes the points as JSON and an overlay PNG.
 
 #include <agex/apps/command_line.h>
+#include <agex/apps/frame_jobs.h>
+#include <agex/apps/output_guard.h>
 #include <agex/apps/pipeline_flags.h>
 #include <agex/detection/depth_pipeline.h>
 #include <agex/apps/output.h>
@@ -41,9 +43,12 @@ main (int argc, char **argv)
     if (input.empty ())
       throw std::runtime_error ("no INPUT frame given (see --help)");
     agex::apps::finishPipelineOptions (vector_flags, params);
-    for (const auto &out : {json_path, overlay_path})
-      if (!out.empty ())
-        agex::checkOutputIsNotInput (out, {input});
+    agex::InputFiles read;  // the frame, and the dataset it belongs to, if any
+    agex::apps::collectFrameJobs ({input}, read, "agex_keypoints");
+    if (!json_path.empty ())
+      agex::apps::checkOutputPath (json_path, agex::apps::OutputKind::JsonDocument, read);
+    if (!overlay_path.empty ())
+      agex::apps::checkOutputPath (overlay_path, agex::apps::OutputKind::Png, read);
 
     const agex::Frame frame = agex::loadFrame (input, frame_options);
     const agex::DepthPipelineResult result = agex::runDepthPipeline (frame.cloud, params);

@@ -3,6 +3,7 @@
 // same bytes.
 
 #include <agex/apps/command_line.h>
+#include <agex/apps/output_guard.h>
 #include <agex/io/atomic_file.h>
 #include <agex/simulation/synthetic_scene.h>
 
@@ -88,10 +89,7 @@ main (int argc, char **argv)
     std::vector<std::string> inputs = options.motion_files;
     if (!options.body_mesh.empty ())
       inputs.push_back (options.body_mesh);
-    agex::checkOutputIsNotInput (output, inputs);
-    std::error_code ec;
-    if (!force && std::filesystem::exists (output, ec))
-      throw std::runtime_error (output + ": already exists; pass --force to replace it");
+    agex::apps::checkOutputPath (output, agex::apps::OutputKind::Dataset, agex::InputFiles (inputs), force);
 
     const agex::SynthGenerator generator (options);
     for (const auto &clip : generator.clips ())

@@ -1,6 +1,7 @@
 #include <agex/classification/patch_classifier.h>
 
 #include <agex/io/atomic_file.h>
+#include <agex/io/input_file.h>
 
 #include "checked_read.h"
 
@@ -109,6 +110,14 @@ readWholeFile (const std::string &path)
     throw ModelError (path + ": model file not found");
   if (std::filesystem::is_directory (path, ec))
     throw ModelError (path + ": is a directory, not a model file");
+  // Before opening: a FIFO would block until some other process writes to it.
+  const std::string problem = notARegularFile (path);
+  if (!problem.empty ())
+    throw ModelError (path + ": " + problem + "; models are read from regular files only");
+  const auto size = std::filesystem::file_size (path, ec);
+  if (!ec && size > kMaxModelFileBytes)
+    throw ModelError (path + ": " + std::to_string (size) + " bytes, more than the " +
+                      std::to_string (kMaxModelFileBytes) + " of any agex model");
   std::ifstream in (path, std::ios::binary);
   if (!in)
     throw ModelError (path + ": cannot open the model file: " + std::strerror (errno));
@@ -336,6 +345,69 @@ trainBoosters (int classes, int workers, const std::function<cv::Ptr<cv::ml::Boo
 }
 }  // namespace
 
+std::size_t
+yamlNestingBound (const std::string &yaml, std::size_t limit, std::size_t *line)
+{
+  constexpr std::size_t kNone = static_cast<std::size_t> (-1);
+  std::size_t bound = 0, bound_line = 1, flow = 0;
+  // The smallest indentation a line continuing any counted flow collection may have: an
+  // opener first on its line may belong to a collection whose continuation lines need only
+  // column 1; one after other text on a line indented c belongs to a block item (or the
+  // root) on that line, so continuation lines need at least column c + 1.
+  std::size_t continuation = kNone;
+  std::size_t number = 0;
+  for (std::size_t begin = 0; begin < yaml.size ();)
+  {
+    ++number;
+    std::size_t end = yaml.find ('\n', begin);
+    if (end == std::string::npos)
+      end = yaml.size ();
+    std::size_t c = begin;
+    while (c < end && yaml[c] == ' ')
+      ++c;
+    const auto first = c < end ? static_cast<unsigned char> (yaml[c]) : 0u;
+    // OpenCV skips a comment line and the rest of a line at a control character (or refuses
+    // it); only a line with something printable first can hold structure.
+    if (first > ' ' && first != '#')
+    {
+      const std::size_t column = c - begin;
+      if (flow > 0 && column < continuation)
+      {
+        flow = 0;  // every open flow collection would end here (or OpenCV refuses the line)
+        continuation = kNone;
+      }
+      std::size_t markers = 0;
+      for (std::size_t i = c; i < end; ++i)
+      {
+        const char ch = yaml[i];
+        if (ch == '[' || ch == '{')
+        {
+          ++flow;
+          continuation = std::min (continuation, i == c ? std::size_t (1) : column + 1);
+        }
+        else if (ch == ':' || ch == '-')
+          ++markers;
+        const std::size_t depth = flow + column + 1 + markers;
+        if (depth > bound)
+        {
+          bound = depth;
+          bound_line = number;
+          if (bound > limit)
+          {
+            if (line)
+              *line = bound_line;
+            return bound;
+          }
+        }
+      }
+    }
+    begin = end + 1;
+  }
+  if (line)
+    *line = bound_line;
+  return bound;
+}
+
 void
 PatchClassifier::train (const std::vector<agex::DepthPatch> &patches, const std::vector<int> &labels, int classes,
                         const PatchClassifierParams &params, const std::function<void (int, int)> &progress)
@@ -560,6 +632,10 @@ PatchClassifier::load (const std::string &path)
     throw ModelError (path + ": empty file, not an agex model");
   if (bytes.compare (0, 5, "%YAML") != 0)
     throw ModelError (path + ": not an agex model (not a YAML file)");
+  std::size_t deep_line = 0;
+  if (yamlNestingBound (bytes, kMaxModelNesting, &deep_line) > kMaxModelNesting)
+    throw ModelError (path + ":" + std::to_string (deep_line) + ": nested more than " +
+                      std::to_string (kMaxModelNesting) + " levels deep; not an agex model (damaged or hostile)");
 
   cv::FileStorage fs;
   try
@@ -634,7 +710,13 @@ PatchClassifier::load (const std::string &path)
     }
     try
     {
-      model.metadata_ = nlohmann::json::parse (text);
+      // nlohmann's parser does not recurse, but printing the result does: bound it here.
+      constexpr int kMaxMetadataDepth = 64;
+      model.metadata_ = nlohmann::json::parse (text, [] (int depth, nlohmann::json::parse_event_t, nlohmann::json &) {
+        if (depth > kMaxMetadataDepth)
+          throw ModelError ("metadata nested more than " + std::to_string (kMaxMetadataDepth) + " levels deep");
+        return true;
+      });
     }
     catch (const nlohmann::json::exception &e)
     {

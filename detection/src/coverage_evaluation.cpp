@@ -62,6 +62,13 @@ CoverageEvaluation::coverage (BodyPart part, int k) const
          found.size ();
 }
 
+std::size_t
+CoverageEvaluation::coveredCount (BodyPart part, int k) const
+{
+  const auto &found = first_found_[static_cast<int> (part)];
+  return static_cast<std::size_t> (std::count_if (found.begin (), found.end (), [k] (int f) { return f >= 1 && f <= k; }));
+}
+
 double
 CoverageEvaluation::coverageCountingCentroid (BodyPart part, int k) const
 {

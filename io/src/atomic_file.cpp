@@ -82,6 +82,17 @@ InputFiles::add (const std::string &path)
 }
 
 void
+InputFiles::addTree (const std::string &directory)
+{
+  std::error_code ec;
+  const fs::path p = fs::weakly_canonical (fs::absolute (directory, ec), ec);
+  if (ec || p.empty ())
+    return;
+  add (directory);
+  trees_.insert (p);
+}
+
+void
 InputFiles::checkOutput (const std::string &output) const
 {
   std::error_code ec;
@@ -93,5 +104,13 @@ InputFiles::checkOutput (const std::string &output) const
   // A directory output replaced with --force would take its contents with it.
   if (folders_.count (out))
     throw std::runtime_error (output + ": output would replace a directory that holds an input file; choose another path");
+  for (fs::path a = out.parent_path (); !a.empty (); a = a.parent_path ())
+  {
+    if (trees_.count (a))
+      throw std::runtime_error (output + ": output would land inside the input dataset " + a.string () +
+                                "; write it elsewhere");
+    if (a == a.parent_path ())
+      break;
+  }
 }
 }  // namespace agex

@@ -1,4 +1,5 @@
 #include <agex/io/bonn.h>
+#include <agex/io/input_file.h>
 
 #include <charconv>
 #include <cmath>
@@ -11,6 +12,9 @@ namespace agex
 std::vector<BonnLabel>
 readBonnLabels (const std::string &path)
 {
+  const std::string problem = notARegularFile (path);
+  if (!problem.empty ())
+    throw DatasetError (path + ": " + problem);
   std::ifstream in (path);
   if (!in)
     throw DatasetError (path + ": cannot open the Bonn labels file");

@@ -1,4 +1,5 @@
 #include <agex/io/dataset.h>
+#include <agex/io/input_file.h>
 
 #include <pcl/io/pcd_io.h>
 
@@ -77,6 +78,53 @@ validId (const std::string &id)
          std::all_of (id.begin (), id.end (), [] (unsigned char c) {
            return std::isalnum (c) || c == '_' || c == '-' || c == '.';
          });
+}
+
+/** Length of the UTF-8 sequence starting at text[i], 0 if it is not a valid one
+  * (overlong forms, surrogates and code points past U+10FFFF are not). */
+std::size_t
+utf8Length (const std::string &text, std::size_t i)
+{
+  const auto byte = [&] (std::size_t k) { return static_cast<unsigned char> (text[k]); };
+  const unsigned char c = byte (i);
+  std::size_t n = 0;
+  std::uint32_t code = 0, min = 0;
+  if (c < 0x80)
+    return 1;
+  if ((c & 0xe0) == 0xc0)
+    n = 2, code = c & 0x1f, min = 0x80;
+  else if ((c & 0xf0) == 0xe0)
+    n = 3, code = c & 0x0f, min = 0x800;
+  else if ((c & 0xf8) == 0xf0)
+    n = 4, code = c & 0x07, min = 0x10000;
+  else
+    return 0;
+  if (i + n > text.size ())
+    return 0;
+  for (std::size_t k = 1; k < n; ++k)
+  {
+    if ((byte (i + k) & 0xc0) != 0x80)
+      return 0;
+    code = (code << 6) | (byte (i + k) & 0x3f);
+  }
+  if (code < min || code > 0x10ffff || (code >= 0xd800 && code <= 0xdfff))
+    return 0;
+  return n;
+}
+
+/** Whether dataset.json at path says it is an agex dataset (its "format"), read with a bound. */
+bool
+saysAgexDataset (const fs::path &json_path)
+{
+  if (!notARegularFile (json_path.string ()).empty ())
+    return false;
+  std::error_code ec;
+  const auto size = fs::file_size (json_path, ec);
+  if (ec || size > (std::uintmax_t (256) << 20))
+    return false;
+  std::ifstream in (json_path, std::ios::binary);
+  const nlohmann::json doc = nlohmann::json::parse (in, nullptr, false);
+  return doc.is_object () && doc.contains ("format") && doc["format"] == kFormat;
 }
 
 std::string
@@ -187,6 +235,9 @@ loadLabelImage (const std::string &path, int width, int height)
 std::vector<PartLabel>
 readLabelsCsv (const std::string &path)
 {
+  const std::string problem = notARegularFile (path);
+  if (!problem.empty ())
+    throw DatasetError (path + ": " + problem);
   std::ifstream in (path);
   if (!in)
     throw DatasetError (path + ": cannot open labels file");
@@ -238,6 +289,11 @@ readLabelsCsv (const std::string &path)
         throw DatasetError (where + (i == 13 ? "visible" : "keyframe") + " must be 0 or 1, got '" + cells[i] + "'");
     label.visible = cells[13] == "1";
     label.keyframe = cells[14] == "1";
+    // Scoring needs the tip of every visible label: a NaN there would count as a miss
+    // (or make every coverage NaN) instead of being refused.
+    if (label.visible && !label.tip.allFinite ())
+      throw DatasetError (where + "visible is 1 but the tip is not a number (" + cells[3] + "," + cells[4] + "," +
+                          cells[5] + "); a visible label needs its 3D tip (or set visible to 0)");
     if (has_person && (!parseInt (cells[15], label.person) || label.person < 1 || label.person > 255))
       throw DatasetError (where + "person must be an integer 1-255, got '" + cells[15] + "'");
     if (!seen.emplace (label.frame, label.person, static_cast<int> (label.part), label.instance).second)
@@ -282,6 +338,9 @@ Dataset::read (const std::string &directory)
   if (!fs::is_directory (directory, ec))
     throw DatasetError (directory + ": not a dataset directory (it does not exist or is not a directory)");
   const std::string json_path = (fs::path (directory) / "dataset.json").string ();
+  const std::string problem = notARegularFile (json_path);
+  if (!problem.empty ())
+    throw DatasetError (json_path + ": " + problem);
   std::ifstream in (json_path);
   if (!in)
     throw DatasetError (json_path + ": missing; every dataset directory has a dataset.json");
@@ -436,6 +495,87 @@ Dataset::loadFrame (const std::string &frame_id) const
   return frame.cloud;
 }
 
+std::string
+datasetReplaceProblem (const std::string &path)
+{
+  std::error_code ec;
+  const fs::file_status status = fs::symlink_status (path, ec);
+  if (ec || !fs::exists (status))
+    return "";
+  if (fs::is_symlink (status))
+    return "is a symbolic link, not an agex dataset";
+  if (!fs::is_directory (status))
+    return std::string (fs::is_regular_file (status) ? "is a regular file" : "is not a directory") +
+           ", not an agex dataset";
+  const fs::path dir (path);
+  if (!saysAgexDataset (dir / "dataset.json"))
+    return "is a directory without an agex dataset.json, not an agex dataset";
+  // Only what DatasetWriter writes: anything else was put there by someone else.
+  const std::map<std::string, std::string> folders = {
+      {"frames", ".pcd"}, {kPartLabelFolder, ".png"}, {kPersonFolder, ".png"}};
+  for (const auto &entry : fs::directory_iterator (dir, ec))
+  {
+    const std::string name = entry.path ().filename ().string ();
+    const bool ours = (name == "dataset.json" || name == "labels.csv") ? entry.is_regular_file ()
+                      : folders.count (name)                             ? entry.is_directory ()
+                                                                         : false;
+    if (!ours)
+      return "holds " + name + ", which is not part of an agex dataset";
+  }
+  if (ec)
+    return "cannot be listed: " + ec.message ();
+  for (const auto &[folder, extension] : folders)
+  {
+    if (!fs::is_directory (dir / folder, ec))
+      continue;
+    for (const auto &entry : fs::directory_iterator (dir / folder, ec))
+      if (!entry.is_regular_file () || entry.path ().extension () != extension)
+        return "holds " + folder + "/" + entry.path ().filename ().string () + ", which is not part of an agex dataset";
+    if (ec)
+      return "cannot be listed: " + ec.message ();
+  }
+  return "";
+}
+
+std::string
+enclosingDataset (const std::string &file)
+{
+  std::error_code ec;
+  const fs::path p = fs::weakly_canonical (fs::absolute (file, ec), ec);
+  if (ec)
+    return "";
+  fs::path dir = p.parent_path ();
+  if ((dir.filename () == "frames" && p.extension () == ".pcd") ||
+      ((dir.filename () == kPartLabelFolder || dir.filename () == kPersonFolder) && p.extension () == ".png"))
+    dir = dir.parent_path ();
+  else if (p.filename () != "dataset.json" && p.filename () != "labels.csv")
+    return "";
+  return saysAgexDataset (dir / "dataset.json") ? dir.string () : "";
+}
+
+bool
+validSequenceName (const std::string &name, std::string *why)
+{
+  const auto refuse = [&] (const std::string &reason) {
+    if (why)
+      *why = reason;
+    return false;
+  };
+  for (std::size_t i = 0; i < name.size ();)
+  {
+    const std::size_t n = utf8Length (name, i);
+    if (n == 0)
+      return refuse ("is not valid UTF-8");
+    const unsigned char c = static_cast<unsigned char> (name[i]);
+    if (n == 1 && (c < 0x20 || c == 0x7f))
+      return refuse ("holds a control character");
+    if (c == ',' || c == '@')
+      return refuse (std::string ("holds '") + static_cast<char> (c) + "', which separates sequences in DIR@SEQ,SEQ");
+    i += n;
+  }
+  return true;
+}
+
 DatasetWriter::DatasetWriter (const std::string &directory, const DatasetInfo &info, bool overwrite)
   : directory_ (directory), info_ (info), overwrite_ (overwrite)
 {
@@ -444,8 +584,14 @@ DatasetWriter::DatasetWriter (const std::string &directory, const DatasetInfo &i
       throw DatasetError (directory + ": part label " + std::to_string (id) + " '" + name +
                           "': ids are 1-255 (0 is not a body), names 1-64 characters");
   std::error_code ec;
-  if (fs::exists (directory, ec) && !overwrite)
+  if (fs::exists (fs::symlink_status (directory, ec)) && !overwrite)
     throw DatasetError (directory + ": already exists; pass --force to replace it");
+  if (overwrite)
+  {
+    const std::string problem = datasetReplaceProblem (directory);
+    if (!problem.empty ())
+      throw DatasetError (directory + ": " + problem + "; only an earlier agex dataset is replaced");
+  }
   const fs::path target = fs::absolute (directory);
   fs::create_directories (target.parent_path (), ec);
   const std::string prefix = "." + target.filename ().string () + ".partial-";
@@ -506,6 +652,12 @@ DatasetWriter::checkLabels (const std::string &id, const std::vector<PartLabel> 
 void
 DatasetWriter::addLabels (const std::string &id, const std::string &sequence, const std::vector<PartLabel> &labels)
 {
+  std::string why;
+  if (!validSequenceName (sequence, &why))
+    throw DatasetError ("frame '" + id + "': the sequence name '" + sequence + "' " + why);
+  for (const auto &label : labels)
+    if (label.visible && !label.tip.allFinite ())
+      throw DatasetError ("frame '" + id + "': a visible label without a finite tip");
   frames_.push_back ({id, sequence});
   for (PartLabel label : labels)
   {
@@ -624,10 +776,14 @@ DatasetWriter::commit ()
   }
   std::error_code ec;
   std::string old;
-  if (fs::exists (directory_, ec))
+  if (fs::exists (fs::symlink_status (directory_, ec)))
   {
     if (!overwrite_)
       throw DatasetError (directory_ + ": appeared while converting; not replaced");
+    // Checked again: it may have changed while the frames were written.
+    const std::string problem = datasetReplaceProblem (directory_);
+    if (!problem.empty ())
+      throw DatasetError (directory_ + ": " + problem + "; only an earlier agex dataset is replaced");
     old = staging_ + ".old";
     fs::rename (directory_, old, ec);
     if (ec)

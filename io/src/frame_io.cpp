@@ -1,4 +1,5 @@
 #include <agex/io/frame_io.h>
+#include <agex/io/input_file.h>
 #include <agex/io/pcd_reader.h>
 
 #include <pcl/PCLPointCloud2.h>
@@ -11,6 +12,7 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <sstream>
 
 namespace fs = std::filesystem;
 
@@ -170,6 +172,42 @@ depthImageToCloud (const cv::Mat &depth, const CameraIntrinsics &intrinsics, dou
     }
 }
 
+namespace
+{
+/** The intrinsics must be stated for this image size, with the principal point inside it. */
+void
+checkIntrinsics (const std::string &path, const cv::Mat &depth, const FrameOptions &options)
+{
+  const CameraIntrinsics &k = options.intrinsics;
+  const int w = depth.cols, h = depth.rows;
+  if ((options.intrinsics_width > 0 || options.intrinsics_height > 0) &&
+      (w != options.intrinsics_width || h != options.intrinsics_height))
+  {
+    std::ostringstream text;
+    text << "a " << w << "x" << h << " depth image, but the intrinsics (fx " << k.fx << ", fy " << k.fy << ", cx "
+         << k.cx << ", cy " << k.cy << ") are stated for " << options.intrinsics_width << "x"
+         << options.intrinsics_height << "; give this camera's --fx, --fy, --cx and --cy";
+    // The same camera binned or upsampled keeps its aspect ratio: say what its values would be.
+    if (options.intrinsics_width > 0 && options.intrinsics_height > 0 &&
+        std::int64_t (w) * options.intrinsics_height == std::int64_t (h) * options.intrinsics_width)
+    {
+      const double s = static_cast<double> (w) / options.intrinsics_width;
+      text << " (the same camera at " << w << "x" << h << ": --fx " << k.fx * s << " --fy " << k.fy * s << " --cx "
+           << (k.cx + 0.5) * s - 0.5 << " --cy " << (k.cy + 0.5) * s - 0.5 << ")";
+    }
+    fail (path, text.str ());
+  }
+  // Pixel centres run from 0 to w - 1; the image covers -0.5 to w - 0.5.
+  if (!(k.cx >= -0.5 && k.cx <= w - 0.5) || !(k.cy >= -0.5 && k.cy <= h - 0.5))
+  {
+    std::ostringstream text;
+    text << "the principal point (cx " << k.cx << ", cy " << k.cy << ") lies outside the " << w << "x" << h
+         << " image; check --cx and --cy";
+    fail (path, text.str ());
+  }
+}
+}  // namespace
+
 Frame
 loadFrame (const std::string &path, const FrameOptions &options)
 {
@@ -178,6 +216,10 @@ loadFrame (const std::string &path, const FrameOptions &options)
     fail (path, "no such file");
   if (fs::is_directory (path, ec))
     fail (path, "is a directory, expected a frame file");
+  // Before anything opens it: a FIFO would block until some other process writes to it.
+  const std::string problem = notARegularFile (path);
+  if (!problem.empty ())
+    fail (path, problem + "; frames are read from regular files only");
 
   const std::string ext = lowerExtension (path);
   if (ext == ".pcd")
@@ -204,6 +246,10 @@ loadFrame (const std::string &path, const FrameOptions &options)
   if (depth.rows < 2 || depth.cols < 2)
     fail (path, "a " + std::to_string (depth.cols) + "x" + std::to_string (depth.rows) +
                     " image; a depth frame needs at least 2 rows and 2 columns");
+
+  checkIntrinsics (path, depth, options);
+  if (!(options.depth_scale >= 0.0) || !std::isfinite (options.depth_scale))
+    fail (path, "the depth scale must be a positive number of metres per unit (or 0 for the format's default)");
 
   Frame frame;
   frame.path = path;

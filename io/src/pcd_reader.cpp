@@ -1,4 +1,5 @@
 #include <agex/io/pcd_reader.h>
+#include <agex/io/input_file.h>
 
 #include <pcl/common/io.h>
 
@@ -495,6 +496,10 @@ isDense (const pcl::PCLPointCloud2 &cloud)
 pcl::PCLPointCloud2
 readPcd (const std::string &path)
 {
+  // Before opening: a FIFO would block until some other process writes to it.
+  const std::string problem = notARegularFile (path);
+  if (!problem.empty ())
+    fail (path, problem + "; frames are read from regular files only");
   std::ifstream in (path, std::ios::binary | std::ios::ate);
   if (!in)
     fail (path, "cannot open file");

@@ -1,4 +1,5 @@
 #include <agex/simulation/bvh.h>
+#include <agex/io/input_file.h>
 
 #include <algorithm>
 #include <cctype>
@@ -288,6 +289,10 @@ bvhChannelName (BvhChannel channel)
 BvhMotion
 BvhMotion::read (const std::string &path)
 {
+  // Before opening: a FIFO would block until some other process writes to it.
+  const std::string problem = notARegularFile (path);
+  if (!problem.empty ())
+    throw BvhError (path + ": " + problem + "; BVH motion is read from regular files only");
   std::ifstream in (path, std::ios::binary);
   if (!in)
     throw BvhError (path + ": cannot open BVH file (" + std::strerror (errno) + ")");

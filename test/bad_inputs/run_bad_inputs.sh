@@ -20,7 +20,9 @@ head -c 1000 /dev/zero > in/wrong_size.u16
 head -c 100000 in/model.yml > in/truncated_model.yml
 sed 's/^format_version: 1$/format_version: 2/' in/model.yml > in/version2_model.yml
 head -c $((176 * 144 * 2)) /dev/zero | tr '\0' '\7' > in/wall_176x144.u16
-"$BIN/agex_convert" u16 --input in/wall_176x144.u16 --output in/dataset --width 176 --height 144 >/dev/null 2>&1
+# A 176x144 .u16 camera: its size and intrinsics (depth images of 640x480 need none).
+SR="--width 176 --height 144 --fx 250 --fy 250 --cx 87.5 --cy 71.5"
+"$BIN/agex_convert" u16 --input in/wall_176x144.u16 --output in/dataset $SR >/dev/null 2>&1
 head -c 300 in/dataset/frames/wall_176x144.pcd > in/truncated_compressed.pcd
 cp "$SRC/test/fuzz/regressions/frame_pcd/repeated_fields_line_overflows_point.pcd" in/fields_overflow.pcd
 for variant in truncated_json version2 truncated_labels wrong_frame_size; do cp -r in/dataset "in/ds_$variant"; done
@@ -104,27 +106,28 @@ check "train on a dataset without labels" 1 "training on 0 patches from 0 frames
 check "train on a damaged labels.csv" 1 "labels.csv:2: expected 15" $T --dataset in/ds_truncated_labels --out out/model.yml
 [ ! -e out/synth ] && [ ! -e out/model.yml ] || { echo "FAILED: a failed run left an output" >&2; failures=$((failures + 1)); }
 # Outputs.
-echo previous > out/kept.json
+$D in/frame.png --json out/kept.json >/dev/null 2>&1
+previous=$(cat out/kept.json)
 check "failing run, earlier output in the way" 1 "truncated.png" $D in/truncated.png --json out/kept.json
-check_kept "failing run" out/kept.json previous
+check_kept "failing run" out/kept.json "$previous"
 check "output directory that is a file" 1 "out/kept.json/x.json" $D in/frame.png --json out/kept.json/x.json
-check_kept "output under a file" out/kept.json previous
+check_kept "output under a file" out/kept.json "$previous"
 check "output over an input" 1 "would overwrite an input" $D in/frame.png --overlay in/frame.png
-check "convert onto an existing dataset" 1 "already exists" $C u16 --input in/wall_176x144.u16 --output in/dataset --width 176 --height 144
+check "convert onto an existing dataset" 1 "already exists" $C u16 --input in/wall_176x144.u16 --output in/dataset $SR
 check "report under a file" 1 "out/kept.json/r.json" $E coverage --dataset in/dataset --json out/kept.json/r.json
-check_kept "report under a file" out/kept.json previous
+check_kept "report under a file" out/kept.json "$previous"
 
 # Interrupted batch runs: killed part way, then run again.
 mkdir -p in/batch
 for i in $(seq -w 1 60); do cp in/wall_176x144.u16 "in/batch/f$i.u16"; done
 (cd in && find . -type f -print0 | sort -z | xargs -0 sha256sum) > inputs.sha256
-$D in/batch --width 176 --height 144 --json out/batch.jsonl >/dev/null 2>&1 &
+$D in/batch $SR --json out/batch.jsonl >/dev/null 2>&1 &
 pid=$!
 for _ in $(seq 1 400); do [ -s out/batch.jsonl ] && [ "$(wc -l < out/batch.jsonl)" -ge 5 ] && break; sleep 0.05; done
 kill -KILL $pid 2>/dev/null; wait $pid 2>/dev/null
 printf '{"frame":"torn' >> out/batch.jsonl  # as if killed inside a write
 before=$(grep -c . out/batch.jsonl)
-check "agex_detect batch killed (SIGKILL) after $((before - 1)) frames, run again" 0 "already in" $D in/batch --width 176 --height 144 --json out/batch.jsonl
+check "agex_detect batch killed (SIGKILL) after $((before - 1)) frames, run again" 0 "already in" $D in/batch $SR --json out/batch.jsonl
 lines=$(wc -l < out/batch.jsonl) unique=$(grep -o '"frame":"[^"]*"' out/batch.jsonl | sort -u | wc -l)
 [ "$lines" = 60 ] && [ "$unique" = 60 ] || { echo "FAILED: resumed batch has $lines lines, $unique frames (want 60)" >&2; failures=$((failures + 1)); }
 # Full-size frames, so that the conversion is still running when it is killed.
@@ -153,20 +156,138 @@ check "report over a dataset's labels" 1 "labels.csv: output would overwrite an 
 check "plot over a dataset frame" 1 "wall_176x144.pcd: output would overwrite an input" $E coverage --dataset in/dataset --plot in/dataset/frames/wall_176x144.pcd
 check "model over a dataset's labels" 1 "labels.csv: output would overwrite an input" $T --dataset in/dataset --out in/dataset/labels.csv
 check "benchmark over a dataset frame" 1 "wall_176x144.pcd: output would overwrite an input" $BIN/agex_bench --dataset in/dataset --json in/dataset/frames/wall_176x144.pcd
-check "batch JSON lines onto a file that is not a batch result" 1 "notes.txt: line 1 is not a frame result" $D in/batch --width 176 --height 144 --json in/notes.txt
+check "batch JSON lines onto a file that is not a batch result" 1 "notes.txt: line 1 is not a frame result" $D in/batch $SR --json in/notes.txt
 check "a directory without frames" 1 "no_frames: no frames" $D in/no_frames --json out/none.jsonl
 check "a frame one row high" 1 "one_row_100x1.u16: a 100x1 image; a depth frame needs at least 2 rows" $K in/one_row_100x1.u16 --width 100 --height 1
 check "a NaN focal length" 1 "--fy must be a positive number" $K in/frame.png --fy nan
 check "a median window of 100000 pixels" 1 "--median-window is 100000, outside \\[0, 31\\]" $K in/frame.png --median-window 100000
 # Reruns find their frames however the input is spelled; more jobs than frames is fine.
-check "agex_detect rerun as ./in/batch/" 0 "60 frames already in" $D ./in/batch/ --width 176 --height 144 --json out/batch.jsonl
+check "agex_detect rerun as ./in/batch/" 0 "60 frames already in" $D ./in/batch/ $SR --json out/batch.jsonl
 [ "$(wc -l < out/batch.jsonl)" = 60 ] || { echo "FAILED: the respelled rerun added lines" >&2; failures=$((failures + 1)); }
 head -c -1 out/batch.jsonl > out/no_newline.jsonl  # the last line lost its newline
 sed -i '$d' out/no_newline.jsonl && head -c -1 out/no_newline.jsonl > out/cut.jsonl
-check "agex_detect rerun onto a file whose last line has no newline" 0 "59 frames already in" $D in/batch --width 176 --height 144 --json out/cut.jsonl
+check "agex_detect rerun onto a file whose last line has no newline" 0 "59 frames already in" $D in/batch $SR --json out/cut.jsonl
 [ "$(grep -c '^{.*}$' out/cut.jsonl)" = 60 ] || { echo "FAILED: the appended line was glued to the last one" >&2; failures=$((failures + 1)); }
-check "agex_detect --jobs 100000" 0 "" $D in/batch --width 176 --height 144 --json out/jobs.jsonl --jobs 100000
+check "agex_detect --jobs 100000" 0 "" $D in/batch $SR --json out/jobs.jsonl --jobs 100000
 [ "$(wc -l < out/jobs.jsonl)" = 60 ] || { echo "FAILED: --jobs 100000 did not give 60 lines" >&2; failures=$((failures + 1)); }
+
+# --force and outputs over what is not theirs: only an earlier output of the same kind is
+# replaced, recognised by its content; inputs and unrelated files stay byte for byte.
+mkdir -p in/loss/src in/loss/thesis in/two
+cp in/dataset/frames/wall_176x144.pcd in/loss/src/a.pcd
+cp in/dataset/frames/wall_176x144.pcd in/loss/src/b.pcd
+echo "chapter 1" > in/loss/thesis/c.txt
+echo "my own file" > in/mine.txt
+cp -r in/dataset in/ds_with_notes && echo "my notes" > in/ds_with_notes/notes.txt
+cp in/wall_176x144.u16 in/two/a.u16 && cp in/wall_176x144.u16 in/two/b.u16
+"$BIN/agex_convert" u16 --input in/two --output in/ds_two $SR >/dev/null 2>&1
+if [ -f "$SRC/../shared/data/mocap/cmu_131_01.bvh" ]; then
+  cp "$SRC/../shared/data/mocap/cmu_131_01.bvh" in/walk.bvh
+else
+  cp in/truncated.bvh in/walk.bvh  # the output is refused before the motion is read
+fi
+(cd in && find . -type f -print0 | sort -z | xargs -0 sha256sum) > inputs.sha256
+check "convert --force onto a directory holding its input and other files" 1 "in/loss: output would replace a directory that holds an input" $C pcd --input in/loss/src --output in/loss --force
+check "convert --force onto a regular file" 1 "mine.txt: is a regular file, not an agex dataset" $C u16 --input in/wall_176x144.u16 $SR --output in/mine.txt --force
+check "convert --force onto a directory that is not a dataset" 1 "thesis: is a directory without an agex dataset.json" $C pcd --input in/loss/src --output in/loss/thesis --force
+check "synth --force onto a directory that is not a dataset" 1 "thesis: is a directory without an agex dataset.json" $S --motion in/walk.bvh --frames 2 --output in/loss/thesis --force
+check "synth --force onto a dataset holding a file of someone else" 1 "ds_with_notes: holds notes.txt, which is not part of an agex dataset" $S --motion in/walk.bvh --frames 2 --output in/ds_with_notes --force
+if [ -f "$SRC/../shared/data/mocap/cmu_131_01.bvh" ]; then  # a real motion: its dataset has part and person images
+  $S --motion in/walk.bvh --frames 2 --output out/synth_again >/dev/null 2>&1
+  check "synth --force onto its own earlier dataset" 0 "2 sr4000 frames" $S --motion in/walk.bvh --frames 2 --output out/synth_again --force
+fi
+$C u16 --input in/wall_176x144.u16 $SR --output out/replaced >/dev/null 2>&1
+check "convert --force onto an earlier agex dataset" 0 "1 frames" $C u16 --input in/wall_176x144.u16 $SR --output out/replaced --force
+check "one frame of a dataset, JSON over its labels" 1 "labels.csv: output would (overwrite an input|land inside the input dataset)" $D in/ds_two/frames/a.pcd --json in/ds_two/labels.csv
+check "one frame of a dataset, overlay over another frame" 1 "b.pcd: output would (overwrite an input|land inside the input dataset)" $D in/ds_two/frames/a.pcd --overlay in/ds_two/frames/b.pcd
+check "one frame, JSON over a file of another kind" 1 "mine.txt: exists and is not a JSON document of a frame" $D in/frame.png --json in/mine.txt
+check "one frame, overlay over a file of another kind" 1 "mine.txt: exists and is not a PNG written by agex" $D in/frame.png --overlay in/mine.txt
+sum_batch=$(sha256sum < out/batch.jsonl)
+check "one frame, JSON over a JSON-lines results file" 1 "batch.jsonl: is a JSON-lines results file" $D in/frame.png --json out/batch.jsonl
+[ "$(sha256sum < out/batch.jsonl)" = "$sum_batch" ] || { echo "FAILED: the JSON-lines file was replaced" >&2; failures=$((failures + 1)); }
+$D in/frame.png --json out/single.json --overlay out/single.png >/dev/null 2>&1
+check "one frame, JSON and overlay over those of an earlier run" 0 "" $D in/frame.png --json out/single.json --overlay out/single.png
+grep -q '"frame"' out/single.json || { echo "FAILED: the earlier single-frame JSON was not replaced" >&2; failures=$((failures + 1)); }
+
+# Two runs on one JSON-lines file at once, and reruns from elsewhere: complete, duplicate-free
+# output, or a clear refusal.
+# race CASE FILE: runs the batch twice at once onto FILE and checks the outcome.
+race () {
+  local what=$1 file=$2
+  $D in/batch $SR --json "$file" > out/race1.log 2>&1 &
+  local p1=$!
+  $D in/batch $SR --json "$file" > out/race2.log 2>&1 &
+  local p2=$!
+  wait $p1; local s1=$?
+  wait $p2; local s2=$?
+  local lines unique refusal
+  lines=$(wc -l < "$file") unique=$(grep -o '"frame":"[^"]*"' "$file" | sort -u | wc -l)
+  refusal=$(cat out/race1.log out/race2.log | grep -E "error|already in" | head -1 | sed "s|$WORK/||g")
+  echo "| $what | \`agex_detect in/batch $SR --json ${file#"$WORK/"}\`, twice at once | $s1, $s2 | $refusal |"
+  for pair in "$s1 out/race1.log" "$s2 out/race2.log"; do
+    set -- $pair
+    if [ "$1" != 0 ] && ! grep -q "another agex_detect run is writing to this file" "$2"; then
+      echo "FAILED: $what: exit $1 without the refusal:" >&2; tail -3 "$2" >&2; failures=$((failures + 1))
+    fi
+  done
+  [ "$lines" = 60 ] && [ "$unique" = 60 ] || { echo "FAILED: $what: $lines lines, $unique frames (want 60)" >&2; failures=$((failures + 1)); }
+}
+race "two batch runs on one new --json file" out/race.jsonl
+head -20 out/batch.jsonl > out/race_torn.jsonl && printf '{"frame":"torn' >> out/race_torn.jsonl
+race "two resumes of a file with a torn last line" out/race_torn.jsonl
+check "agex_detect rerun from another working directory" 0 "60 frames already in" env -C in $D batch $SR --json ../out/batch.jsonl
+check "agex_detect rerun with the absolute path of in/batch" 0 "60 frames already in" $D "$WORK/in/batch" $SR --json out/batch.jsonl
+[ "$(wc -l < out/batch.jsonl)" = 60 ] || { echo "FAILED: the reruns from elsewhere added lines" >&2; failures=$((failures + 1)); }
+mkdir -p in/bad_batch && cp in/truncated.png in/bad_batch/a.png && cp in/truncated.png in/bad_batch/b.png
+(cd in && find . -type f -print0 | sort -z | xargs -0 sha256sum) > inputs.sha256
+check "batch whose first frame fails" 1 "truncated or not a PNG" $D in/bad_batch --json out/never.jsonl
+[ ! -e out/never.jsonl ] || { echo "FAILED: a run that wrote no frame left out/never.jsonl" >&2; failures=$((failures + 1)); }
+
+# Parsers that would recurse without bound, and inputs that would block.
+cp "$SRC/test/fuzz/regressions/model/nested_100000_deep_overflows_opencv_stack.yml" in/nested_model.yml
+mkdir -p fifo && mkfifo fifo/frame.u16
+(cd in && find . -type f -print0 | sort -z | xargs -0 sha256sum) > inputs.sha256
+check "model nested 100,000 deep ([[[...)" 1 "nested_model.yml:3: nested more than 1000 levels deep" $D in/frame.png --model in/nested_model.yml --json out/a.json
+check "the same model for agex_eval" 1 "nested_model.yml:3: nested more than 1000 levels deep" $E compare --dataset in/dataset --model-agex in/nested_model.yml
+check "a .u16 frame that is a FIFO" 1 "frame.u16: is a FIFO \\(named pipe\\), not a regular file" timeout 20 $D fifo/frame.u16 --json out/a.json
+
+# Model settings are checked like the flags they mirror (file and key named).
+sed 's/\\"mixed_window_radius\\":2,/\\"mixed_window_radius\\":1000000,/' in/model.yml > in/mixed_radius_model.yml
+sed 's/\\"median_window\\":3,/\\"median_window\\":100000,/' in/model.yml > in/median_model.yml
+sed 's/\\"k\\":16,/\\"k\\":100000000,/' in/model.yml > in/k_model.yml
+sed 's/\\"delta_connected\\":[0-9.e-]*,/\\"delta_connected\\":-1,/' in/model.yml > in/delta_model.yml
+for f in mixed_radius median k delta; do
+  cmp -s in/model.yml "in/${f}_model.yml" && { echo "FAILED: in/${f}_model.yml: the setting was not changed" >&2; failures=$((failures + 1)); }
+done
+(cd in && find . -type f -print0 | sort -z | xargs -0 sha256sum) > inputs.sha256
+check "model whose mixed_window_radius is 1e6" 1 "mixed_radius_model.yml.*mixed_window_radius" $D in/frame.png --model in/mixed_radius_model.yml --json out/a.json
+check "model whose median_window is 1e5" 1 "median_model.yml.*median_window" $D in/frame.png --model in/median_model.yml --json out/a.json
+check "model whose k is 1e8" 1 "k_model.yml.*\\bk\\b" $D in/frame.png --model in/k_model.yml --json out/a.json
+check "model whose delta_connected is -1" 1 "delta_model.yml.*delta_connected" $D in/frame.png --model in/delta_model.yml --json out/a.json
+check "--delta-connected 100" 1 "--delta-connected" $K in/frame.png --delta-connected 100
+
+# Results that would be wrong without a word.
+head -c $((320 * 240 * 2)) /dev/zero | tr '\0' '\7' > in/wall_320x240.u16
+cp -r in/dataset in/ds_nan_tip
+printf '%s\n%s\n' "$(head -1 in/dataset/labels.csv)" "wall_176x144,head,0,nan,nan,nan,nan,nan,nan,10,10,10,10,1,1" > in/ds_nan_tip/labels.csv
+mkdir -p in/utf/séq in/utf/sèq in/take_a/take in/take_b/take
+for d in in/utf/séq in/utf/sèq in/take_a/take in/take_b/take; do cp in/dataset/frames/wall_176x144.pcd "$d/"; done
+(cd in && find . -type f -print0 | sort -z | xargs -0 sha256sum) > inputs.sha256
+check "a 320x240 frame with the Kinect's 640x480 intrinsics" 1 "a 320x240 depth image, but the intrinsics .* are stated for 640x480" $D in/wall_320x240.u16 --width 320 --height 240 --json out/a.json
+check "a 176x144 frame with the default intrinsics" 1 "a 176x144 depth image, but the intrinsics" $K in/wall_176x144.u16 --width 176 --height 144
+check "a principal point outside the frame" 1 "principal point \\(cx 1000, cy 239.5\\) lies outside the 640x480 image" $D in/frame.png --cx 1000 --json out/a.json
+check "agex_eval compare on a dataset without labels" 0 "AGEX_5 contains 0/0" $E compare --dataset in/dataset --json out/compare.json
+if grep -q -- '-9223372036854775808' out/compare.json || [ "$(tr -d ' \n' < out/compare.json | grep -o '"fraction":null' | wc -l)" != 3 ]; then
+  echo "FAILED: compare: empty classes are not null, or a count is not an integer:" >&2; grep -A3 contained out/compare.json | head -8 >&2
+  failures=$((failures + 1))
+fi
+check "label with NaN tips marked visible" 1 "labels.csv:2: visible is 1 but the tip is not a number" $E coverage --dataset in/ds_nan_tip --json out/a.json
+check "sequences séq and sèq" 0 "2 frames" $C pcd --input in/utf/séq in/utf/sèq --output out/utf
+grep -q '"sequence": "séq"' out/utf/dataset.json && grep -q '"sequence": "sèq"' out/utf/dataset.json ||
+  { echo "FAILED: the sequence names were not kept" >&2; failures=$((failures + 1)); }
+check "two directories of one name" 1 "would both be sequence 'take'" $C pcd --input in/take_a/take in/take_b/take --output out/take
+check "--depth-scale 0" 1 "--depth-scale must be a positive number" $K in/frame.png --depth-scale 0
+check "--min-confidence nan" 1 "--min-confidence must lie in \\[0, 1\\]" $D in/frame.png --min-confidence nan
 
 if [ "$failures" -gt 0 ]; then
   echo "$failures bad-input case(s) failed" >&2

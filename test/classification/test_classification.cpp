@@ -7,6 +7,11 @@
 
 #include "test_support.h"
 
+#include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
+
+#include <sys/stat.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -920,5 +925,130 @@ TEST (ModelFile, DamagedModelsThrowModelErrorNamingTheFile)
   const std::string meta = dir.file ("meta.yml");
   agex_test::writeAll (meta, replaceOnce (text, "\"|{", "\"|{{"));
   expectModelError (meta, "metadata");
+}
+
+/** The depth of the node tree cv::FileStorage built: its parser recursed this deep. */
+std::size_t
+treeDepth (const cv::FileNode &root)
+{
+  std::size_t deepest = 0;
+  std::vector<std::pair<cv::FileNode, std::size_t>> stack{{root, 1}};
+  while (!stack.empty ())
+  {
+    const auto [node, depth] = stack.back ();
+    stack.pop_back ();
+    deepest = std::max (deepest, depth);
+    if (node.isMap () || node.isSeq ())
+      for (cv::FileNodeIterator it = node.begin (); it != node.end (); ++it)
+        stack.push_back ({*it, depth + 1});
+  }
+  return deepest;
+}
+
+std::string
+repeat (const std::string &text, int times)
+{
+  std::string out;
+  for (int i = 0; i < times; ++i)
+    out += text;
+  return out;
+}
+
+TEST (ModelFile, DeepNestingIsRefusedBeforeOpenCVParsesIt)
+{
+  // agex's own models are far below the limit.
+  for (const char *name : {"agex_bonn.yml", "agex_bonn_sw.yml"})
+  {
+    const std::string path = std::string (AGEX_SOURCE_DIR) + "/data/models/" + name;
+    const std::size_t bound = agex::yamlNestingBound (agex_test::readAll (path));
+    std::cout << name << ": nesting bound " << bound << "\n";
+    EXPECT_GT (bound, 3u);
+    EXPECT_LT (bound, 200u) << name;
+  }
+
+  // 100,000 levels in each form OpenCV's parser recurses on; each overflowed its stack
+  // (a crash, not an error) before the check. The line of the excess is named.
+  TempDir dir;
+  const std::string deep = dir.file ("deep.yml");
+  const std::string header = "%YAML:1.0\n---\nformat: agex-model\n";
+  const auto indentedMaps = [] (int levels) {
+    std::string text;
+    for (int i = 0; i < levels; ++i)
+      text += std::string (static_cast<std::size_t> (i), ' ') + "k:\n";
+    return text + std::string (static_cast<std::size_t> (levels), ' ') + "x\n";
+  };
+  for (const std::string &body :
+       {"a: " + std::string (100000, '['), "a: " + repeat ("{a:", 100000), "a:\n " + repeat ("- ", 100000) + "x\n",
+        "a: " + repeat ("a: ", 100000) + "x\n", indentedMaps (3000),
+        "a: " + repeat ("[ \"]\", ", 100000)})
+  {
+    agex_test::writeAll (deep, header + body + "\nend: agex-model\n");
+    SCOPED_TRACE (body.substr (0, 40));
+    expectModelError (deep, ": nested more than 1000 levels deep");
+  }
+  agex_test::writeAll (deep, header + "a: " + std::string (100000, '[') + "\n");
+  expectModelError (deep, deep + ":4: nested");
+
+  // The bound is a bound: on documents OpenCV parses, never below the depth of its tree,
+  // whatever the strings, comments, flow continuation lines and block forms.
+  const std::vector<std::string> documents = {
+      "a: " + std::string (500, '[') + std::string (500, ']') + "\n",
+      "a: " + repeat ("{a: ", 300) + "1" + std::string (300, '}') + "\n",
+      "a:\n   " + repeat ("- ", 300) + "x\n",
+      "a: " + repeat ("b: ", 200) + "x\n",
+      indentedMaps (200),
+      "a: " + repeat ("[ \"]\", ", 300) + std::string (300, ']') + "\n",
+      "a: " + repeat ("[ ']]]', ", 300) + std::string (300, ']') + "\n",
+      "a:\n  [ 1,\n    [ 2,\n   [ 3, [ 4 ] ] ] ]\nb: [ [ [\n  1 ] ] ]\n",
+      "a:\n   - { x: [ 1,\n        2 ], y: { z: [ [ 3 ] ] } }\n   - { x: [ 1 ] }\n# [ [ [ [\nb: 1\n",
+      "a: !!seq [ [ 1 ] ]\nb: \"[[[[\"\nc: '{{{{'\n",
+      "--- " + std::string (100, '[') + std::string (100, ']') + "\n",
+      "a:\n   - - - - [ { b: c } ]\n   - x\n",
+  };
+  int parsed = 0;
+  for (const auto &body : documents)
+  {
+    const std::string yaml = "%YAML:1.0\n---\n" + body;
+    SCOPED_TRACE (body.substr (0, 60));
+    cv::FileStorage fs;
+    try
+    {
+      fs.open (yaml, cv::FileStorage::READ | cv::FileStorage::MEMORY | cv::FileStorage::FORMAT_YAML);
+    }
+    catch (const cv::Exception &)
+    {
+      continue;
+    }
+    if (!fs.isOpened ())
+      continue;
+    ++parsed;
+    EXPECT_GE (agex::yamlNestingBound (yaml), treeDepth (fs.root ()));
+    EXPECT_GT (treeDepth (fs.root ()), 2u);
+  }
+  EXPECT_GE (parsed, 10) << "most of the documents must be valid YAML for OpenCV, or the check proves little";
+}
+
+TEST (ModelFile, DeepMetadataAndFifosAreRefused)
+{
+  const PatchClassifier &classifier = trainedClassifier ();
+  TempDir dir;
+  // Metadata JSON nested 100 deep: nlohmann parses it without recursing, but printing it
+  // (as reports do) recurses, so it is bounded too.
+  nlohmann::json deep = 1;
+  for (int i = 0; i < 100; ++i)
+    deep = nlohmann::json::array ({deep});
+  const std::string path = dir.file ("deep_metadata.yml");
+  classifier.save (path, {{"training", deep}});
+  expectModelError (path, "metadata nested more than 64 levels deep");
+  nlohmann::json fine = 1;
+  for (int i = 0; i < 60; ++i)
+    fine = nlohmann::json::array ({fine});
+  classifier.save (path, {{"training", fine}});
+  EXPECT_NO_THROW (PatchClassifier::load (path)) << "60 levels are fine";
+
+  // A FIFO would block the reader until someone writes to it.
+  const std::string fifo = dir.file ("fifo.yml");
+  ASSERT_EQ (::mkfifo (fifo.c_str (), 0600), 0);
+  expectModelError (fifo, "is a FIFO (named pipe), not a regular file");
 }
 }  // namespace

@@ -14,6 +14,7 @@
 #include <nlohmann/json.hpp>
 
 #include <signal.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -367,13 +368,35 @@ TEST (DatasetWriter, ExistingDirectoryNeedsOverwrite)
   EXPECT_EQ (readText (dir / "precious.txt"), "keep me") << "refused, so untouched";
   EXPECT_TRUE (stagingLeftovers (tmp.path ()).empty ()) << joined (stagingLeftovers (tmp.path ()));
 
-  // With overwrite the old contents are replaced by the new dataset.
+  // Nor with overwrite: only an earlier agex dataset is replaced, never a directory of other
+  // things, a regular file, or a dataset someone put a file of their own in.
+  expectThrowWith ([&] { agex::DatasetWriter writer (dir.string (), smallInfo (), true); },
+                   {dir.string (), "is a directory without an agex dataset.json", "only an earlier agex dataset"});
+  EXPECT_EQ (readText (dir / "precious.txt"), "keep me");
+  const fs::path file = tmp.path () / "notes.txt";
+  writeText (file, "my notes");
+  expectThrowWith ([&] { agex::DatasetWriter writer (file.string (), smallInfo (), true); },
+                   {file.string (), "is a regular file, not an agex dataset"});
+  EXPECT_EQ (readText (file), "my notes");
+  fs::remove (file);
+  fs::remove (dir / "precious.txt");
+  writeText (dir / "dataset.json", "{\"format\": \"something-else\"}");
+  expectThrowWith ([&] { agex::DatasetWriter writer (dir.string (), smallInfo (), true); },
+                   {dir.string (), "without an agex dataset.json"});
+  fs::remove_all (dir);
+
   SmallDataset small;
-  small.write (dir.string (), true);
-  EXPECT_FALSE (fs::exists (dir / "precious.txt"));
-  EXPECT_EQ (agex::Dataset::read (dir.string ()).frames ().size (), 3u);
-  EXPECT_TRUE (stagingLeftovers (tmp.path ()).empty ()) << joined (stagingLeftovers (tmp.path ()));
-  // ... and so is that one, by a dataset of one frame.
+  small.write (dir.string ());
+  writeText (dir / "precious.txt", "keep me");
+  expectThrowWith ([&] { agex::DatasetWriter writer (dir.string (), smallInfo (), true); },
+                   {dir.string (), "holds precious.txt, which is not part of an agex dataset"});
+  EXPECT_EQ (readText (dir / "precious.txt"), "keep me");
+  fs::remove (dir / "precious.txt");
+  writeText (dir / "frames" / "mine.txt", "keep me");
+  expectThrowWith ([&] { agex::DatasetWriter writer (dir.string (), smallInfo (), true); },
+                   {dir.string (), "holds frames/mine.txt"});
+  fs::remove (dir / "frames" / "mine.txt");
+  // An earlier dataset is replaced by the new one, here by a dataset of one frame.
   small.ids.resize (1);
   small.write (dir.string (), true);
   EXPECT_EQ (agex::Dataset::read (dir.string ()).frames ().size (), 1u);
@@ -575,6 +598,117 @@ TEST_F (BadDataset, FrameOfTheWrongSize)
   expectThrowWith<agex::FrameError> ([&] { ds.loadFrame ("m.2"); }, {pcd, "5x3", "4x3"});
 }
 
+TEST_F (BadDataset, LabelsVisibleWithoutATip)
+{
+  // Line 2 (z-1 head 0) is visible: a NaN tip there is refused, as an inf is; marked
+  // invisible, the same label is fine.
+  editText (csv (), "z-1,head,0,0.125,-0.75,2.345,", "z-1,head,0,nan,nan,nan,");
+  expectReadFails ({csv ().string () + ":2:", "visible is 1 but the tip is not a number"});
+  editText (csv (), "z-1,head,0,nan,nan,nan,", "z-1,head,0,0.125,inf,2.345,");
+  expectReadFails ({csv ().string () + ":2:", "tip_y"});
+  editText (csv (), "z-1,head,0,0.125,inf,2.345,", "z-1,head,0,0.125,nan,2.345,");
+  expectReadFails ({csv ().string () + ":2:", "visible is 1"});
+  std::string text = readText (csv ());
+  const std::size_t row = text.find ("z-1,head,0,0.125,nan,2.345,");
+  ASSERT_NE (row, std::string::npos);
+  const std::size_t end = text.find ('\n', row);
+  ASSERT_EQ (text.substr (end - 4, 4), ",1,1");
+  text.replace (end - 4, 4, ",0,1");
+  writeText (csv (), text);
+  EXPECT_NO_THROW (agex::Dataset::read (dir ()));
+}
+
+TEST_F (BadDataset, FifosInPlaceOfItsFilesAreRefusedWithoutBlocking)
+{
+  fs::remove (csv ());
+  ASSERT_EQ (::mkfifo (csv ().c_str (), 0600), 0);
+  expectReadFails ({csv ().string (), "is a FIFO (named pipe), not a regular file"});
+  fs::remove (json ());
+  ASSERT_EQ (::mkfifo (json ().c_str (), 0600), 0);
+  expectReadFails ({json ().string (), "FIFO"});
+  expectThrowWith ([&] { agex::readBonnLabels (csv ().string ()); }, {csv ().string (), "FIFO"});
+}
+
+TEST (DatasetReplacement, OnlyAnEarlierDatasetOfItsOwnFilesMayBeReplaced)
+{
+  TempDir tmp;
+  const std::string ds = tmp.file ("ds");
+  SmallDataset ().write (ds);
+  EXPECT_EQ (agex::datasetReplaceProblem (ds), "");
+  EXPECT_EQ (agex::datasetReplaceProblem (tmp.file ("missing")), "") << "nothing to lose";
+  // Recognised by content, not by name.
+  const std::string file = tmp.file ("dataset.json");
+  writeText (file, readText (fs::path (ds) / "dataset.json"));
+  EXPECT_NE (agex::datasetReplaceProblem (file).find ("is a regular file, not an agex dataset"), std::string::npos);
+  const std::string other = tmp.file ("other");
+  fs::create_directories (other);
+  EXPECT_NE (agex::datasetReplaceProblem (other).find ("without an agex dataset.json"), std::string::npos);
+  writeText (fs::path (other) / "dataset.json", "{\"format\": \"agex-dataset\"");  // cut: not JSON
+  EXPECT_NE (agex::datasetReplaceProblem (other).find ("without an agex dataset.json"), std::string::npos);
+  fs::create_directories (fs::path (ds) / "frames" / "sub");
+  EXPECT_NE (agex::datasetReplaceProblem (ds).find ("holds frames/sub"), std::string::npos);
+  fs::remove (fs::path (ds) / "frames" / "sub");
+  // A dataset with per-pixel part and person images (agex_synth's) is all its own files.
+  const std::string labelled = tmp.file ("labelled");
+  {
+    agex::DatasetInfo info = smallInfo ();
+    info.part_labels = {{1, "head"}};
+    agex::DatasetWriter writer (labelled, info);
+    writer.addFrame ("f0", "s", smallCloud (0), {});
+    writer.addPartLabels ("f0", cv::Mat (info.height, info.width, CV_8UC1, cv::Scalar (1)));
+    writer.addPersonLabels ("f0", cv::Mat (info.height, info.width, CV_8UC1, cv::Scalar (1)));
+    writer.commit ();
+  }
+  ASSERT_TRUE (fs::exists (fs::path (labelled) / "labels" / "f0.png"));
+  ASSERT_TRUE (fs::exists (fs::path (labelled) / "persons" / "f0.png"));
+  EXPECT_EQ (agex::datasetReplaceProblem (labelled), "");
+  EXPECT_EQ (fs::path (agex::enclosingDataset (labelled + "/labels/f0.png")), fs::canonical (labelled));
+  writeText (fs::path (labelled) / "persons" / "notes.txt", "mine");
+  EXPECT_NE (agex::datasetReplaceProblem (labelled).find ("holds persons/notes.txt"), std::string::npos);
+  fs::create_symlink (ds, tmp.file ("link"));
+  EXPECT_NE (agex::datasetReplaceProblem (tmp.file ("link")).find ("symbolic link"), std::string::npos);
+
+  // The dataset a file belongs to.
+  EXPECT_EQ (fs::path (agex::enclosingDataset (ds + "/frames/a_0.pcd")), fs::canonical (ds));
+  EXPECT_EQ (fs::path (agex::enclosingDataset (ds + "/labels.csv")), fs::canonical (ds));
+  EXPECT_EQ (agex::enclosingDataset (ds + "/frames/a_0.png"), "");
+  EXPECT_EQ (agex::enclosingDataset (tmp.file ("notes.txt")), "");
+}
+
+TEST (DatasetWriter, SequenceNamesAreKeptExactlyOrRefused)
+{
+  EXPECT_TRUE (agex::validSequenceName ("s\xc3\xa9q"));   // séq
+  EXPECT_TRUE (agex::validSequenceName ("s\xc3\xa8q"));   // sèq
+  EXPECT_TRUE (agex::validSequenceName ("take 1"));
+  EXPECT_TRUE (agex::validSequenceName (""));
+  std::string why;
+  EXPECT_FALSE (agex::validSequenceName ("s\xe9q", &why));  // Latin-1, not UTF-8
+  EXPECT_EQ (why, "is not valid UTF-8");
+  EXPECT_FALSE (agex::validSequenceName ("\xc0\xaf"));      // an overlong '/'
+  EXPECT_FALSE (agex::validSequenceName ("\xed\xa0\x80"));  // a surrogate
+  EXPECT_FALSE (agex::validSequenceName ("a,b", &why));
+  EXPECT_NE (why.find ("separates sequences"), std::string::npos);
+  EXPECT_FALSE (agex::validSequenceName ("a@b"));
+  EXPECT_FALSE (agex::validSequenceName ("a\tb"));
+
+  TempDir tmp;
+  {
+    agex::DatasetWriter writer (tmp.file ("utf"), smallInfo ());
+    writer.addFrame ("a", "s\xc3\xa9q", smallCloud (0), {});
+    writer.addFrame ("b", "s\xc3\xa8q", smallCloud (1), {});
+    EXPECT_THROW (writer.addFrame ("c", "a,b", smallCloud (2), {}), agex::DatasetError);
+    // A visible label needs a tip: the reader would refuse the file otherwise.
+    EXPECT_THROW (writer.addFrame ("d", "s", smallCloud (2),
+                                   {makeLabel (BodyPart::Head, 0, kNan3, kNan3, {1.f, 1.f}, {1.f, 1.f}, true, true)}),
+                  agex::DatasetError);
+    writer.commit ();
+  }
+  const agex::Dataset ds = agex::Dataset::read (tmp.file ("utf"));
+  ASSERT_EQ (ds.frames ().size (), 2u);
+  EXPECT_EQ (ds.frames ()[0].sequence, "s\xc3\xa9q");
+  EXPECT_EQ (ds.frames ()[1].sequence, "s\xc3\xa8q");
+}
+
 // ---------------------------------------------------------------------------
 // 4. The Bonn labels and lifting a label pixel to 3D
 
@@ -754,6 +888,10 @@ TEST (CoverageEvaluation, CountsExtremaAfterTheCentroid)
   EXPECT_DOUBLE_EQ (eval.coverage (BodyPart::Head, 1), 1.0);
   EXPECT_DOUBLE_EQ (eval.coverage (BodyPart::Foot, 1), 0.5);
   EXPECT_DOUBLE_EQ (eval.coverage (BodyPart::Foot, 2), 1.0);
+  for (const auto part : {BodyPart::Head, BodyPart::Hand, BodyPart::Foot})
+    for (int k : {1, 2, 5})
+      EXPECT_DOUBLE_EQ (static_cast<double> (eval.coveredCount (part, k)),
+                        eval.coverage (part, k) * static_cast<double> (eval.labelCount (part)));
   EXPECT_DOUBLE_EQ (eval.coverage (BodyPart::Hand, 1), 0.0);
   EXPECT_DOUBLE_EQ (eval.coverage (BodyPart::Hand, 2), 0.0);
   EXPECT_DOUBLE_EQ (eval.coverage (BodyPart::Hand, 3), 0.5);
@@ -795,6 +933,9 @@ TEST (CoverageEvaluation, NothingScoredGivesNaNAndNull)
   const nlohmann::json report = eval.report (5);
   EXPECT_TRUE (report["coverage"]["hand"].is_null ());
   EXPECT_TRUE (report["orientation_median_deg"]["head"].is_null ());
+  // Counts stay whole numbers, 0 for a class without labels.
+  EXPECT_EQ (eval.coveredCount (BodyPart::Head, 5), 0u);
+  EXPECT_EQ (eval.coveredCount (BodyPart::Hand, 5), 0u);
 }
 
 // ---------------------------------------------------------------------------

@@ -12,6 +12,8 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 
+#include <cerrno>
+#include <cmath>
 #include <csignal>
 #include <cstring>
 #include <fstream>
@@ -107,13 +109,20 @@ TEST (FrameIo, Png8BitRoundTrip)
   const std::string path = dir.file ("depth8.png");
   ASSERT_TRUE (cv::imwrite (path, depth));
 
-  const agex::Frame frame = agex::loadFrame (path);
+  // The default (Kinect) intrinsics are stated for 640x480: for this 8x6 image they are
+  // used as they are only when said to be meant for any size.
+  agex::FrameOptions any_size;
+  any_size.intrinsics_width = any_size.intrinsics_height = 0;
+  any_size.intrinsics.cx = any_size.intrinsics.cy = 2.0;
+  const agex::Frame frame = agex::loadFrame (path, any_size);
   EXPECT_EQ (frame.path, path);
   EXPECT_TRUE (frame.from_depth_image);
   EXPECT_DOUBLE_EQ (frame.depth_scale, 0.016) << "documented default scale of 8-bit (Bonn) PNGs";
-  expectBackProjection (depth, frame, 0.016, agex::CameraIntrinsics ());
+  expectBackProjection (depth, frame, 0.016, any_size.intrinsics);
 
   agex::FrameOptions options;
+  options.intrinsics_width = 8;
+  options.intrinsics_height = 6;
   options.intrinsics.fx = 300.0;
   options.intrinsics.fy = 310.0;
   options.intrinsics.cx = 3.5;
@@ -130,9 +139,13 @@ TEST (FrameIo, Png16BitRoundTrip)
   const cv::Mat depth = randomDepth (7, 9, CV_16UC1, 2);
   const std::string path = dir.file ("depth16.PNG");  // extensions are case-insensitive
   ASSERT_TRUE (cv::imwrite (path, depth));
-  const agex::Frame frame = agex::loadFrame (path);
+  agex::FrameOptions options;
+  options.intrinsics_width = options.intrinsics_height = 0;
+  options.intrinsics.cx = 4.0;
+  options.intrinsics.cy = 3.0;
+  const agex::Frame frame = agex::loadFrame (path, options);
   EXPECT_DOUBLE_EQ (frame.depth_scale, 0.001) << "16-bit PNGs default to millimetres";
-  expectBackProjection (depth, frame, 0.001, agex::CameraIntrinsics ());
+  expectBackProjection (depth, frame, 0.001, options.intrinsics);
 }
 
 TEST (FrameIo, PngErrors)
@@ -183,6 +196,10 @@ TEST (FrameIo, RawU16CorrectAndWrongSizes)
   agex::FrameOptions options;
   options.width = width;
   options.height = height;
+  options.intrinsics_width = width;
+  options.intrinsics_height = height;
+  options.intrinsics.cx = 3.5;
+  options.intrinsics.cy = 2.5;
   const agex::Frame frame = agex::loadFrame (path, options);
   EXPECT_DOUBLE_EQ (frame.depth_scale, 0.001);
   expectBackProjection (depth, frame, 0.001, options.intrinsics);
@@ -623,6 +640,79 @@ TEST (PcdReader, HostileAsciiAndHeadersAreRefused)
   expectRefused (std::string (70000, '#') + "\n" + kXyzHeader + body, {path, "no DATA line in its first 65536 bytes"});
   // Binary data shorter than the points.
   expectRefused (kXyzHeader + "DATA binary\n" + std::string (47, '\0'), {path, "binary data of 47 bytes, the header 48"});
+}
+
+TEST (FrameIo, IntrinsicsOfAnotherImageSizeAreRefused)
+{
+  TempDir dir;
+  // A 320x240 depth image with the defaults (the Kinect's at 640x480): refused, saying what
+  // the same camera's intrinsics would be at that size.
+  const std::string qvga = dir.file ("qvga.png");
+  ASSERT_TRUE (cv::imwrite (qvga, cv::Mat (240, 320, CV_16UC1, cv::Scalar (1500))));
+  expectFrameError ([&] { agex::loadFrame (qvga); },
+                    {qvga, "a 320x240 depth image", "stated for 640x480", "--fx 262.5 --fy 262.5 --cx 159.5 --cy 119.5"});
+  // Another aspect ratio gets no suggestion: only this camera's own values will do.
+  const std::string portrait = dir.file ("portrait.u16");
+  writeAll (portrait, std::string (144 * 176 * 2, '\x07'));
+  agex::FrameOptions options;
+  options.width = 144;
+  options.height = 176;
+  try
+  {
+    agex::loadFrame (portrait, options);
+    ADD_FAILURE () << "a 144x176 frame with 640x480 intrinsics was loaded";
+  }
+  catch (const agex::FrameError &e)
+  {
+    EXPECT_NE (std::string (e.what ()).find ("a 144x176 depth image"), std::string::npos) << e.what ();
+    EXPECT_EQ (std::string (e.what ()).find ("the same camera"), std::string::npos) << e.what ();
+  }
+  // Intrinsics for this size (or said to be for any size) are used.
+  options.intrinsics = {210.0, 210.0, 71.5, 87.5};
+  options.intrinsics_width = 144;
+  options.intrinsics_height = 176;
+  EXPECT_EQ (agex::loadFrame (portrait, options).cloud->width, 144u);
+  options.intrinsics_width = options.intrinsics_height = 0;
+  EXPECT_EQ (agex::loadFrame (portrait, options).cloud->height, 176u);
+  // A principal point outside the image is an error, whatever the size rule.
+  options.intrinsics.cx = 144.0;
+  expectFrameError ([&] { agex::loadFrame (portrait, options); },
+                    {portrait, "principal point (cx 144, cy 87.5) lies outside the 144x176 image"});
+  options.intrinsics.cx = 71.5;
+  options.intrinsics.cy = -1.0;
+  expectFrameError ([&] { agex::loadFrame (portrait, options); }, {portrait, "principal point"});
+  options.intrinsics.cy = std::nan ("");
+  expectFrameError ([&] { agex::loadFrame (portrait, options); }, {portrait, "principal point"});
+  // The image's edges (pixel centres -0.5 and w - 0.5 away) are still inside.
+  options.intrinsics.cx = -0.5;
+  options.intrinsics.cy = 175.5;
+  EXPECT_NO_THROW (agex::loadFrame (portrait, options));
+  // A negative or NaN depth scale is refused, not taken for the default.
+  options.depth_scale = -0.001;
+  expectFrameError ([&] { agex::loadFrame (portrait, options); }, {portrait, "depth scale"});
+  options.depth_scale = std::nan ("");
+  expectFrameError ([&] { agex::loadFrame (portrait, options); }, {portrait, "depth scale"});
+  // PCD frames carry their points: the intrinsics play no part.
+  const std::string pcd = dir.file ("small.pcd");
+  Cloud cloud (5, 4, pcl::PointXYZ (0.f, 0.f, 1.f));
+  ASSERT_EQ (pcl::io::savePCDFileBinary (pcd, cloud), 0);
+  EXPECT_EQ (agex::loadFrame (pcd).cloud->width, 5u);
+}
+
+TEST (FrameIo, FifosAndOtherNonRegularFilesAreRefusedWithoutBlocking)
+{
+  // Opening a FIFO for reading blocks until a writer appears: before the check, each of
+  // these calls hung for ever (the test would end in ctest's timeout).
+  TempDir dir;
+  for (const char *name : {"fifo.u16", "fifo.png", "fifo.pcd"})
+  {
+    const std::string fifo = dir.file (name);
+    ASSERT_EQ (::mkfifo (fifo.c_str (), 0600), 0) << std::strerror (errno);
+    expectFrameError ([&] { agex::loadFrame (fifo); }, {fifo, "is a FIFO (named pipe), not a regular file"});
+  }
+  expectFrameError ([&] { agex::readPcd (dir.file ("fifo.pcd")); }, {"fifo.pcd", "FIFO"});
+  // A character device that never ends.
+  expectFrameError ([&] { agex::readPcd ("/dev/zero"); }, {"/dev/zero", "is a character device"});
 }
 
 TEST (FrameIo, MissingFileDirectoryAndUnknownFormat)

@@ -45,7 +45,13 @@ datasetFiles (const Dataset &dataset)
 {
   std::vector<std::string> files{dataset.directory () + "/dataset.json", dataset.directory () + "/labels.csv"};
   for (const auto &frame : dataset.frames ())
+  {
     files.push_back (dataset.framePath (frame.id));
+    if (dataset.hasPartLabels ())
+      files.push_back (dataset.partLabelPath (frame.id));
+    if (dataset.hasPersonLabels ())
+      files.push_back (dataset.personLabelPath (frame.id));
+  }
   return files;
 }
 }  // namespace apps

@@ -2,6 +2,7 @@
 
 #include <agex/landmarks/contour_annotation.h>
 #include <agex/io/frame_io.h>
+#include <agex/io/input_file.h>
 
 #include <boost/program_options/value_semantic.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -88,6 +89,10 @@ cv::Mat
 readImage (const std::string &path, int flags, const std::string &role)
 {
   const std::string what = role.empty () ? "" : " (" + role + ")";
+  // Before opening: a FIFO would block until some other process writes to it.
+  const std::string problem = notARegularFile (path);
+  if (!problem.empty ())
+    throw std::runtime_error (path + ": " + problem + "; images are read from regular files only" + what);
   std::ifstream in (path, std::ios::binary);
   if (!in)
     throw std::runtime_error (path + ": cannot open the image" + what);

@@ -1,5 +1,6 @@
 #include <agex/apps/output.h>
 
+#include <agex/apps/output_guard.h>
 #include <agex/io/atomic_file.h>
 
 #include <opencv2/imgcodecs.hpp>
@@ -26,7 +27,8 @@ writePng (const std::string &path, const cv::Mat &image)
   std::vector<unsigned char> bytes;
   if (!cv::imencode (".png", image, bytes))
     throw std::runtime_error (path + ": PNG encoding failed");
-  writeFileAtomic (path, std::string (bytes.begin (), bytes.end ()));
+  // Marked, so that a later run can tell its own output from any other PNG (output_guard.h).
+  writeFileAtomic (path, markAgexPng (std::string (bytes.begin (), bytes.end ())));
 }
 
 nlohmann::json
@@ -116,6 +118,32 @@ bodyPartColour (int part)
 {
   static const cv::Scalar colours[] = {{40, 40, 220}, {40, 170, 40}, {220, 110, 30}};
   return colours[std::clamp (part, 0, 2)];
+}
+
+cv::Mat
+renderDetections (const pcl::PointCloud<pcl::PointXYZ> &frame, const std::vector<pcl::PointIndices> &meshes,
+                  const std::vector<BodyPartDetection> &detections, float min_confidence)
+{
+  cv::Mat image = renderOverlay (frame, meshes, pcl::PointCloud<InterestPoint> ());
+  const int scale = std::max (1, image.rows / static_cast<int> (std::max (1u, frame.height)));
+  for (auto it = detections.rbegin (); it != detections.rend (); ++it)  // most confident drawn last
+  {
+    if (it->confidence < min_confidence)
+      continue;
+    const cv::Point centre ((it->u + 0.5) * scale, (it->v + 0.5) * scale);
+    const cv::Scalar colour = bodyPartColour (static_cast<int> (it->part));
+    const cv::Point tip = centre + cv::Point (static_cast<int> (std::lround (it->orientation.x () * 40)),
+                                              static_cast<int> (std::lround (it->orientation.y () * 40)));
+    if (tip != centre)
+      cv::arrowedLine (image, centre, tip, colour, 2, cv::LINE_AA, 0, 0.3);
+    cv::circle (image, centre, 9, colour, 3, cv::LINE_AA);
+    char text[64];
+    std::snprintf (text, sizeof text, "%s %.2f", bodyPartName (it->part), it->confidence);
+    cv::putText (image, text, centre + cv::Point (12, -8), cv::FONT_HERSHEY_SIMPLEX, 0.55, cv::Scalar (0, 0, 0), 3,
+                 cv::LINE_AA);
+    cv::putText (image, text, centre + cv::Point (12, -8), cv::FONT_HERSHEY_SIMPLEX, 0.55, colour, 1, cv::LINE_AA);
+  }
+  return image;
 }
 
 cv::Mat

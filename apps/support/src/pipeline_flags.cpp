@@ -49,31 +49,46 @@ po::options_description
 frameOptionsDescription (FrameOptions &options)
 {
   // Checked as they are parsed: a NaN focal length would give empty frames, not an error.
-  const auto positive = [] (const char *name) {
-    return [name] (double v) {
-      if (!(v > 0.0) || !std::isfinite (v))
-        throw std::runtime_error (std::string ("--") + name + " must be a positive number");
+  // An intrinsic given on the command line is meant for the frames at hand, whatever their
+  // size; the defaults are the Kinect's at 640x480 and are refused for frames of another size.
+  const auto intrinsic = [&options] (double CameraIntrinsics::*field, const char *name, bool must_be_positive) {
+    return [&options, field, name, must_be_positive] (double v) {
+      if (!std::isfinite (v) || (must_be_positive && !(v > 0.0)))
+        throw std::runtime_error (std::string ("--") + name + " must be a " +
+                                  (must_be_positive ? "positive" : "finite") + " number");
+      options.intrinsics.*field = v;
+      options.intrinsics_width = options.intrinsics_height = 0;
     };
   };
-  const auto finite = [] (const char *name) {
-    return [name] (double v) {
-      if (!std::isfinite (v))
-        throw std::runtime_error (std::string ("--") + name + " must be a finite number");
-    };
+  const auto number = [] (double v) {
+    std::ostringstream text;
+    text << v;
+    return text.str ();
   };
-  po::options_description desc ("Frame input (depth images; defaults: Kinect, see ../shared/README.md)");
+  const CameraIntrinsics defaults = options.intrinsics;
+  po::options_description desc ("Frame input (depth images; defaults: Kinect at 640x480, see ../shared/README.md)");
   desc.add_options ()
-    ("fx", po::value (&options.intrinsics.fx)->default_value (options.intrinsics.fx)->notifier (positive ("fx")),
-     "focal length x, pixels")
-    ("fy", po::value (&options.intrinsics.fy)->default_value (options.intrinsics.fy)->notifier (positive ("fy")),
-     "focal length y, pixels")
-    ("cx", po::value (&options.intrinsics.cx)->default_value (options.intrinsics.cx)->notifier (finite ("cx")),
-     "principal point x, pixels")
-    ("cy", po::value (&options.intrinsics.cy)->default_value (options.intrinsics.cy)->notifier (finite ("cy")),
-     "principal point y, pixels")
-    ("depth-scale", po::value (&options.depth_scale)->default_value (0.0, "auto")->notifier ([] (double v) {
-       if (!(v >= 0.0) || !std::isfinite (v))
-         throw std::runtime_error ("--depth-scale must be a positive number of metres per depth unit");
+    ("fx", po::value<double> ()->value_name ("PX")->notifier (intrinsic (&CameraIntrinsics::fx, "fx", true)),
+     ("focal length x, pixels (default " + number (defaults.fx) + ")").c_str ())
+    ("fy", po::value<double> ()->value_name ("PX")->notifier (intrinsic (&CameraIntrinsics::fy, "fy", true)),
+     ("focal length y, pixels (default " + number (defaults.fy) + ")").c_str ())
+    ("cx", po::value<double> ()->value_name ("PX")->notifier (intrinsic (&CameraIntrinsics::cx, "cx", false)),
+     ("principal point x, pixels (default " + number (defaults.cx) + ")").c_str ())
+    ("cy", po::value<double> ()->value_name ("PX")->notifier (intrinsic (&CameraIntrinsics::cy, "cy", false)),
+     ("principal point y, pixels (default " + number (defaults.cy) + "); without any of --fx --fy --cx --cy, "
+      "depth images must be 640x480").c_str ())
+    ("depth-scale", po::value<std::string> ()->default_value ("auto")->notifier ([&options] (const std::string &text) {
+       if (text == "auto")
+       {
+         options.depth_scale = 0.0;
+         return;
+       }
+       std::istringstream in (text);
+       double v = 0.0;
+       if (!(in >> v) || !(in >> std::ws).eof () || !(v > 0.0) || !std::isfinite (v))
+         throw std::runtime_error ("--depth-scale must be a positive number of metres per depth unit, or auto; got '" +
+                                   text + "'");
+       options.depth_scale = v;
      }),
      "metres per depth unit; auto: 0.016 for 8-bit PNG (Bonn), 0.001 for 16-bit PNG and .u16")
     ("width", po::value (&options.width)->default_value (options.width), "width of a raw .u16 frame")

@@ -33,6 +33,24 @@ struct PatchGeometry
   float clamp = 0.f;    ///< relative depth clamp and background value, metres
 };
 
+/** The deepest nesting a model file may have, as bounded by yamlNestingBound (agex's own
+  * models stay below 100; OpenCV's YAML parser overflows an 8 MB stack at some tens of
+  * thousands of levels). */
+constexpr std::size_t kMaxModelNesting = 1000;
+/** The largest model file read (agex's own are a few MB). */
+constexpr std::size_t kMaxModelFileBytes = std::size_t (256) << 20;
+
+/** \brief An upper bound on how deep cv::FileStorage's YAML parser nests (and recurses) on
+  * yaml, found in one linear pass without parsing. Flow collections: every '[' and '{'
+  * counts, and the count drops to 0 only at a line that no open flow collection may continue
+  * (OpenCV requires continuation lines to be indented past the block item holding the
+  * collection). Block collections: at most one per column of the line's indentation, plus
+  * one per ':' or '-' on the line. Quotes are ignored, so text in strings only ever raises
+  * the bound. Scanning stops once the bound exceeds limit.
+  * \param line if not null, the 1-based line where the returned bound was reached */
+std::size_t yamlNestingBound (const std::string &yaml, std::size_t limit = static_cast<std::size_t> (-1),
+                              std::size_t *line = nullptr);
+
 /** \brief Classifies depth patches into classes 0..classes()-1 (or none of them).
   *
   * Training cuts a FragmentDictionary from each class's positives, computes every
@@ -79,8 +97,12 @@ public:
     * \throws std::logic_error if not trained, std::runtime_error naming the path if it
     *         cannot be written */
   void save (const std::string &path, const nlohmann::json &metadata) const;
-  /** \brief Reads a model written by save ().
-    * \throws ModelError naming the file and the problem: missing or unreadable, not an
+  /** \brief Reads a model written by save (). Before OpenCV's YAML parser sees the bytes,
+    * they must be a regular file of at most kMaxModelFileBytes whose nesting is within
+    * kMaxModelNesting (yamlNestingBound): that parser recurses once per level and overflows
+    * the stack on a file nested some tens of thousands deep.
+    * \throws ModelError naming the file and the problem: missing or unreadable, not a regular
+    *         file, too large or too deeply nested, not an
     *         agex model, another format version, or damaged (truncated, missing or invalid
     *         nodes, a booster that fails to load or does not fit the dictionary, a fragment
     *         of the wrong size, metadata that is not JSON) */

@@ -37,8 +37,10 @@ public:
     * and its labels (only visible labels with a finite tip are scored). */
   void addFrame (const pcl::PointCloud<agex::InterestPoint> &points, const std::vector<PartLabel> &labels);
 
-  /** Fraction of the class's labels covered at k (extrema). */
+  /** Fraction of the class's labels covered at k (extrema); NaN for a class without labels. */
   double coverage (BodyPart part, int k) const;
+  /** How many of the class's labels are covered at k (extrema). */
+  std::size_t coveredCount (BodyPart part, int k) const;
   double coverageCountingCentroid (BodyPart part, int k) const;
   /** Median angle in degrees between the covering point's orientation and tip - base. */
   double orientationMedianDeg (BodyPart part) const;

@@ -27,11 +27,16 @@ public:
   explicit InputFiles (const std::vector<std::string> &paths);
   /** Adds a file that is read; paths that cannot be resolved are skipped. */
   void add (const std::string &path);
-  /** \throws std::runtime_error if output names an input, or a directory that holds one */
+  /** Adds a directory that is read as a whole (an input dataset): no output may be written
+    * anywhere inside it, nor replace it or a directory above it. */
+  void addTree (const std::string &directory);
+  /** \throws std::runtime_error if output names an input, a directory that holds one, or a
+    * path inside a directory added with addTree */
   void checkOutput (const std::string &output) const;
 
 private:
   std::set<std::filesystem::path> files_;
   std::set<std::filesystem::path> folders_;  ///< every directory above an input
+  std::set<std::filesystem::path> trees_;    ///< directories no output may enter
 };
 }  // namespace agex

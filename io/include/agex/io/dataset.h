@@ -126,20 +126,42 @@ std::vector<PartLabel> readLabelsCsv (const std::string &path);
 /** Formats labels as labels.csv text (header included). */
 std::string formatLabelsCsv (const std::vector<PartLabel> &labels);
 
+/** \brief Why the existing path may not be replaced by a new dataset (DatasetWriter with
+  * overwrite, agex_convert and agex_synth --force): "" if it is an agex dataset directory (its
+  * dataset.json says format agex-dataset) holding nothing but what DatasetWriter writes
+  * (dataset.json, labels.csv, frames/ with .pcd files, labels/ and persons/ with .png files),
+  * else what it is, e.g. "is a regular
+  * file, not an agex dataset" or "holds notes.txt, which is not part of an agex dataset".
+  * Recognised by content, never by name. */
+std::string datasetReplaceProblem (const std::string &path);
+
+/** The agex dataset directory a file belongs to (dataset.json, labels.csv, frames/<id>.pcd,
+  * labels/<id>.png or persons/<id>.png of a directory whose dataset.json says format
+  * agex-dataset), or "". */
+std::string enclosingDataset (const std::string &file);
+
+/** \brief Whether name can be a sequence name as it is: valid UTF-8 without
+  * control characters, ',' or '@' (they separate sequences in "DIR@SEQ,SEQ"). why gets the
+  * reason if not. An empty name is allowed (frames without a sequence). */
+bool validSequenceName (const std::string &name, std::string *why = nullptr);
+
 /** \brief Writes a dataset atomically: frames and labels go to a temporary directory
   * next to the target, which commit() renames into place. Without commit() (an
   * exception, an interrupted run) the temporary directory is removed. */
 class DatasetWriter
 {
 public:
-  /** \throws DatasetError if directory exists and overwrite is false */
+  /** \throws DatasetError if directory exists and overwrite is false, or if overwrite is true
+    * and what is there may not be replaced (datasetReplaceProblem: only an earlier agex
+    * dataset, never a file or a directory of other things) */
   DatasetWriter (const std::string &directory, const DatasetInfo &info, bool overwrite = false);
   ~DatasetWriter ();
   DatasetWriter (const DatasetWriter &) = delete;
   DatasetWriter &operator= (const DatasetWriter &) = delete;
 
   /** Adds a frame (organized cloud, metres) and its labels; ids must be unique and
-    * made of letters, digits, '_', '-' and '.'. */
+    * made of letters, digits, '_', '-' and '.', the sequence a validSequenceName, and each
+    * visible label needs a finite tip. */
   void addFrame (const std::string &id, const std::string &sequence, const pcl::PointCloud<pcl::PointXYZ> &cloud,
                  const std::vector<PartLabel> &labels);
   /** The same with colour (an RGB-D frame): readers take x, y, z; agex_annotate rgbd the colour. */

@@ -33,6 +33,14 @@ struct FrameOptions
   /** Image size of a raw .u16 file (it has no header). */
   int width = 640;
   int height = 480;
+  /** The image size `intrinsics` are stated for; the defaults are the Kinect's at 640x480.
+    * A depth image (PNG, .u16) of another size is refused with a FrameError naming both sizes
+    * rather than back-projected with the intrinsics of another image size (a 320x240 frame
+    * with 640x480 intrinsics gives a scene of the wrong shape without a word). 0 x 0: the
+    * intrinsics are meant for whatever size is loaded (the apps set this when --fx, --fy,
+    * --cx or --cy is given). PCD frames carry their points and ignore the intrinsics. */
+  int intrinsics_width = 640;
+  int intrinsics_height = 480;
 };
 
 /** The largest frame loadFrame reads, in pixels (16.7 M, e.g. 4096 x 4096; depth sensors
@@ -76,8 +84,10 @@ depthImageToCloud (const cv::Mat &depth, const CameraIntrinsics &intrinsics,
 
 /** \brief Loads a frame by extension: .pcd (organized, any point type with x, y, z),
   * .png (8 or 16-bit single channel depth) or .u16 (raw little-endian uint16).
-  * \throws FrameError naming the file and the problem (missing, truncated,
-  *         wrong size, unorganized, not a depth image, larger than kMaxFramePixels, ...) */
+  * Only regular files are opened (a FIFO would block forever).
+  * \throws FrameError naming the file and the problem (missing, not a regular file, truncated,
+  *         wrong size, unorganized, not a depth image, larger than kMaxFramePixels, intrinsics
+  *         stated for another image size, a principal point outside the image, ...) */
 Frame loadFrame (const std::string &path, const FrameOptions &options = FrameOptions ());
 
 /** A crop of an organized frame followed by an isotropic resampling, e.g. the

@@ -21,7 +21,8 @@ struct DatasetSelection
   * \throws DatasetError (bad dataset) or std::runtime_error (unknown sequence) */
 DatasetSelection selectDataset (const std::string &spec, bool keyframes_only);
 
-/** Every file of a dataset (dataset.json, labels.csv, all its frames): what no output may overwrite. */
+/** Every file of a dataset (dataset.json, labels.csv, all its frames and their part-label and
+  * person images): what no output may overwrite. */
 std::vector<std::string> datasetFiles (const Dataset &dataset);
 }  // namespace apps
 }  // namespace agex

@@ -1,7 +1,9 @@
 #pragma once
-// What the apps write: JSON documents and overlay PNGs, always atomically.
+// What the apps write: JSON documents and overlay PNGs, always atomically (and PNGs marked
+// as agex's, see output_guard.h).
 
 #include <agex/common/point_types.h>
+#include <agex/detection/body_part_detection.h>
 
 #include <pcl/PointIndices.h>
 #include <pcl/point_cloud.h>
@@ -55,5 +57,11 @@ cv::Mat renderPlot (const Plot &plot, int width = 720, int height = 480);
 
 /** Colour (BGR) of a body-part class in plots: head red, hand green, foot blue. */
 cv::Scalar bodyPartColour (int part);
+
+/** \brief The overlay of agex_detect: the frame and its meshes as renderOverlay draws them,
+  * and each detection at or above min_confidence circled in its class colour with its
+  * confidence and orientation arrow (the most confident drawn last). */
+cv::Mat renderDetections (const pcl::PointCloud<pcl::PointXYZ> &frame, const std::vector<pcl::PointIndices> &meshes,
+                          const std::vector<BodyPartDetection> &detections, float min_confidence);
 }  // namespace apps
 }  // namespace agex

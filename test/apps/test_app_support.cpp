@@ -1,0 +1,343 @@
+// The apps' shared safety code: which outputs may be replaced (checkOutputPath, the PNG
+// mark), the locked JSON-lines results file (resume, torn-line repair, a second writer
+// refused) and the canonical frame names a resumed run finds its frames by.
+
+#include "test_support.h"
+
+#include <agex/apps/frame_jobs.h>
+#include <agex/apps/output.h>
+#include <agex/apps/output_guard.h>
+#include <agex/apps/results_file.h>
+#include <agex/io/dataset.h>
+
+#include <opencv2/imgcodecs.hpp>
+
+#include <pcl/io/pcd_io.h>
+
+#include <nlohmann/json.hpp>
+
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <set>
+#include <thread>
+
+namespace
+{
+using agex::apps::OutputKind;
+using agex_test::readAll;
+using agex_test::TempDir;
+using agex_test::writeAll;
+namespace fs = std::filesystem;
+
+/** Runs f, expecting a std::runtime_error whose message contains every needle. */
+template <typename F>
+void
+expectRefusal (F &&f, const std::vector<std::string> &needles)
+{
+  try
+  {
+    f ();
+    ADD_FAILURE () << "not refused";
+  }
+  catch (const std::runtime_error &e)
+  {
+    for (const auto &needle : needles)
+      EXPECT_NE (std::string (e.what ()).find (needle), std::string::npos) << "'" << needle << "' not in: " << e.what ();
+  }
+}
+
+/** A small agex dataset of two 4x3 frames. */
+void
+writeDataset (const std::string &directory)
+{
+  agex::DatasetInfo info;
+  info.name = "test";
+  info.sensor = "test";
+  info.width = 4;
+  info.height = 3;
+  info.intrinsics = {200.0, 200.0, 1.5, 1.0};
+  agex::DatasetWriter writer (directory, info);
+  for (const char *id : {"f0", "f1"})
+    writer.addFrame (id, "s", agex_test::Cloud (4, 3, pcl::PointXYZ (0.f, 0.f, 1.f)), {});
+  writer.commit ();
+}
+
+std::string
+pngBytes ()
+{
+  std::vector<unsigned char> bytes;
+  EXPECT_TRUE (cv::imencode (".png", cv::Mat (5, 7, CV_8UC3, cv::Scalar (1, 2, 3)), bytes));
+  return std::string (bytes.begin (), bytes.end ());
+}
+
+TEST (OutputGuard, DatasetsReplacedOnlyWhenTheyAreEarlierDatasets)
+{
+  TempDir tmp;
+  const agex::InputFiles none;
+  const std::string ds = tmp.file ("ds");
+  EXPECT_NO_THROW (agex::apps::checkOutputPath (ds, OutputKind::Dataset, none)) << "nothing there yet";
+  writeDataset (ds);
+  expectRefusal ([&] { agex::apps::checkOutputPath (ds, OutputKind::Dataset, none); },
+                 {ds, "already exists; pass --force"});
+  EXPECT_NO_THROW (agex::apps::checkOutputPath (ds, OutputKind::Dataset, none, true));
+
+  // Never something else, with or without --force.
+  const std::string file = tmp.file ("thesis.txt");
+  writeAll (file, "chapter 1");
+  for (bool force : {false, true})
+    expectRefusal ([&] { agex::apps::checkOutputPath (file, OutputKind::Dataset, none, force); },
+                   {file, "is a regular file, not an agex dataset", "--force replaces only an earlier agex dataset"});
+  const std::string dir = tmp.file ("notes");
+  fs::create_directories (dir);
+  expectRefusal ([&] { agex::apps::checkOutputPath (dir, OutputKind::Dataset, none, true); },
+                 {dir, "without an agex dataset.json"});
+  writeAll (ds + "/README", "mine");
+  expectRefusal ([&] { agex::apps::checkOutputPath (ds, OutputKind::Dataset, none, true); }, {"holds README"});
+  fs::remove (ds + "/README");
+
+  // Never an input or a directory above one: the dataset given as the input itself, or a
+  // directory holding the input frames.
+  agex::InputFiles inputs ({ds + "/frames/f0.pcd"});
+  expectRefusal ([&] { agex::apps::checkOutputPath (ds, OutputKind::Dataset, inputs, true); },
+                 {ds, "holds an input file"});
+  expectRefusal ([&] { agex::apps::checkOutputPath (tmp.path ().string (), OutputKind::Dataset, inputs, true); },
+                 {"holds an input file"});
+  EXPECT_EQ (readAll (file), "chapter 1");
+}
+
+TEST (OutputGuard, FilesReplacedOnlyWhenTheyAreEarlierOutputsOfTheirKind)
+{
+  TempDir tmp;
+  agex::InputFiles inputs;
+  const std::string doc = tmp.file ("frame.json"), lines = tmp.file ("frames.jsonl"), text = tmp.file ("notes.txt");
+  agex::apps::writeJson (doc, {{"frame", "d/f.png"}, {"detections", nlohmann::json::array ()}});
+  writeAll (lines, "{\"frame\":\"d/a.png\",\"detections\":[]}\n{\"frame\":\"d/b.png\",\"detections\":[]}\n");
+  writeAll (text, "my notes\n");
+  EXPECT_NO_THROW (agex::apps::checkOutputPath (doc, OutputKind::JsonDocument, inputs));
+  EXPECT_NO_THROW (agex::apps::checkOutputPath (tmp.file ("new.json"), OutputKind::JsonDocument, inputs));
+  expectRefusal ([&] { agex::apps::checkOutputPath (lines, OutputKind::JsonDocument, inputs); },
+                 {lines, "is a JSON-lines results file"});
+  writeAll (lines, "{\"frame\":\"d/a.png\",\"detections\":[]}\n");  // one line: still JSON lines
+  expectRefusal ([&] { agex::apps::checkOutputPath (lines, OutputKind::JsonDocument, inputs); },
+                 {"is a JSON-lines results file"});
+  expectRefusal ([&] { agex::apps::checkOutputPath (text, OutputKind::JsonDocument, inputs); },
+                 {text, "not a JSON document of a frame"});
+  writeAll (tmp.file ("report.json"), "{\n  \"frames\": 3\n}\n");  // JSON, but not a frame's
+  expectRefusal ([&] { agex::apps::checkOutputPath (tmp.file ("report.json"), OutputKind::JsonDocument, inputs); },
+                 {"not a JSON document of a frame"});
+  expectRefusal ([&] { agex::apps::checkOutputPath (tmp.path ().string (), OutputKind::JsonDocument, inputs); },
+                 {"is a directory"});
+  writeAll (tmp.file ("empty"), "");
+  EXPECT_NO_THROW (agex::apps::checkOutputPath (tmp.file ("empty"), OutputKind::Png, inputs)) << "nothing to lose";
+
+  // PNGs: those agex wrote carry its mark; any other PNG (a photo, a depth frame) is refused.
+  const std::string ours = tmp.file ("overlay.png"), theirs = tmp.file ("photo.png");
+  agex::apps::writePng (ours, cv::Mat (5, 7, CV_8UC3, cv::Scalar (1, 2, 3)));
+  writeAll (theirs, pngBytes ());
+  EXPECT_TRUE (agex::apps::isAgexPng (readAll (ours)));
+  EXPECT_FALSE (agex::apps::isAgexPng (readAll (theirs)));
+  EXPECT_NO_THROW (agex::apps::checkOutputPath (ours, OutputKind::Png, inputs));
+  expectRefusal ([&] { agex::apps::checkOutputPath (theirs, OutputKind::Png, inputs); },
+                 {theirs, "not a PNG written by agex"});
+  expectRefusal ([&] { agex::apps::checkOutputPath (text, OutputKind::Png, inputs); }, {"not a PNG written by agex"});
+  // The mark changes nothing of the image.
+  const cv::Mat a = cv::imread (ours, cv::IMREAD_UNCHANGED), b = cv::imread (theirs, cv::IMREAD_UNCHANGED);
+  ASSERT_FALSE (a.empty ());
+  EXPECT_EQ (cv::norm (a, b, cv::NORM_INF), 0.0);
+  EXPECT_EQ (agex::apps::markAgexPng ("not a png"), "not a png");
+
+  // Inputs and everything inside an input dataset stay out of reach.
+  const std::string ds = tmp.file ("ds");
+  writeDataset (ds);
+  inputs.addTree (ds);
+  inputs.add (text);
+  expectRefusal ([&] { agex::apps::checkOutputPath (text, OutputKind::JsonDocument, inputs); },
+                 {text, "would overwrite an input"});
+  expectRefusal ([&] { agex::apps::checkOutputPath (ds + "/frames/f1.pcd", OutputKind::Png, inputs); },
+                 {"f1.pcd", "would land inside the input dataset"});
+  expectRefusal ([&] { agex::apps::checkOutputPath (ds + "/new.json", OutputKind::JsonDocument, inputs); },
+                 {"new.json", "would land inside the input dataset"});
+  EXPECT_EQ (readAll (text), "my notes\n");
+}
+
+TEST (ResultsFile, ResumesRepairsATornLineInPlaceAndRefusesForeignFiles)
+{
+  TempDir tmp;
+  const std::string path = tmp.file ("r.jsonl");
+  {
+    agex::apps::ResultsFile results (path, "test");
+    EXPECT_EQ (results.doneCount (), 0u);
+    results.append ("{\"frame\":\"d/a\"}");
+    results.append ("{\"frame\":\"d/b\"}");
+  }
+  struct stat before;
+  ASSERT_EQ (::stat (path.c_str (), &before), 0);
+  // A torn last line (killed inside a write) is cut off, in place: the same file, so that a
+  // lock taken on it stays meaningful.
+  writeAll (path, readAll (path) + "{\"frame\":\"d/c");
+  {
+    agex::apps::ResultsFile results (path, "test");
+    EXPECT_EQ (results.doneCount (), 2u);
+    EXPECT_TRUE (results.contains ("d/a"));
+    EXPECT_FALSE (results.contains ("d/c"));
+    results.append ("{\"frame\":\"d/c\"}");
+  }
+  struct stat after;
+  ASSERT_EQ (::stat (path.c_str (), &after), 0);
+  EXPECT_EQ (before.st_ino, after.st_ino) << "repaired in place, not replaced";
+  EXPECT_EQ (readAll (path), "{\"frame\":\"d/a\"}\n{\"frame\":\"d/b\"}\n{\"frame\":\"d/c\"}\n");
+  // A complete last line without its newline gets one before the next line.
+  writeAll (path, "{\"frame\":\"d/a\"}");
+  {
+    agex::apps::ResultsFile results (path, "test");
+    results.append ("{\"frame\":\"d/b\"}");
+  }
+  EXPECT_EQ (readAll (path), "{\"frame\":\"d/a\"}\n{\"frame\":\"d/b\"}\n");
+
+  // Someone else's file is left as it is, whatever line is not a result.
+  for (const std::string foreign : {"my notes\n", "{\"frame\":\"d/a\"}\nnot json\n{\"frame\":\"d/b\"}\n",
+                                     "{\"frame\":\"d/a\"}\n{\"x\":1}", "{\"frame\":3}\n"})
+  {
+    writeAll (path, foreign);
+    expectRefusal ([&] { agex::apps::ResultsFile results (path, "test"); }, {path, "is not a frame result of test"});
+    EXPECT_EQ (readAll (path), foreign);
+  }
+  expectRefusal ([&] { agex::apps::ResultsFile results (tmp.path ().string (), "test"); }, {"is a directory"});
+  const std::string fifo = tmp.file ("fifo.jsonl");
+  ASSERT_EQ (::mkfifo (fifo.c_str (), 0600), 0);
+  expectRefusal ([&] { agex::apps::ResultsFile results (fifo, "test"); }, {"FIFO"});
+}
+
+TEST (ResultsFile, ASecondWriterIsRefusedWhileTheFirstHoldsTheFile)
+{
+  TempDir tmp;
+  const std::string path = tmp.file ("r.jsonl");
+  agex::apps::ResultsFile first (path, "agex_detect");
+  first.append ("{\"frame\":\"d/a\"}");
+  // In this process (flock locks belong to the open file, not the process) and in another.
+  expectRefusal ([&] { agex::apps::ResultsFile second (path, "agex_detect"); },
+                 {path, "another agex_detect run is writing to this file"});
+  const pid_t child = ::fork ();
+  ASSERT_GE (child, 0);
+  if (child == 0)
+  {
+    try
+    {
+      agex::apps::ResultsFile second (path, "agex_detect");
+      ::_exit (0);
+    }
+    catch (const std::runtime_error &e)
+    {
+      ::_exit (std::string (e.what ()).find ("is locked") != std::string::npos ? 3 : 1);
+    }
+  }
+  int status = 0;
+  ASSERT_EQ (::waitpid (child, &status, 0), child);
+  ASSERT_TRUE (WIFEXITED (status));
+  EXPECT_EQ (WEXITSTATUS (status), 3) << "the other process must be refused because of the lock";
+  EXPECT_EQ (readAll (path), "{\"frame\":\"d/a\"}\n");
+}
+
+TEST (ResultsFile, AFileThisRunCreatedAndNeverWroteIsRemoved)
+{
+  TempDir tmp;
+  const std::string path = tmp.file ("r.jsonl");
+  {
+    agex::apps::ResultsFile results (path, "test");
+    EXPECT_TRUE (fs::exists (path)) << "created at once, so that it can be locked";
+  }
+  EXPECT_FALSE (fs::exists (path)) << "a run that failed before its first frame leaves nothing";
+  writeAll (path, "");
+  {
+    agex::apps::ResultsFile results (path, "test");
+  }
+  EXPECT_TRUE (fs::exists (path)) << "a file that was there before stays";
+}
+
+TEST (FrameJobs, NamesAreCanonicalHoweverTheInputIsSpelled)
+{
+  TempDir tmp;
+  const std::string dir = tmp.file ("batch");
+  fs::create_directories (dir);
+  for (const char *name : {"b.u16", "a.u16", "notes.txt"})
+    writeAll (dir + "/" + name, "x");
+  const std::string ds = tmp.file ("ds");
+  writeDataset (ds);
+  agex::InputFiles read;
+  const auto jobs = agex::apps::collectFrameJobs ({dir + "/", dir + "/./a.u16", ds}, read, "test");
+  std::vector<std::string> names;
+  for (const auto &j : jobs)
+    names.push_back (j.name);
+  EXPECT_EQ (names, (std::vector<std::string>{"batch/a.u16", "batch/b.u16", "ds/f0", "ds/f1"}))
+      << "directories sorted, a frame given twice processed once, dataset frames by id";
+
+  // The same frames by other spellings: relative to another directory, a frame of the
+  // dataset given on its own.
+  const fs::path cwd = fs::current_path ();
+  fs::current_path (tmp.path ());
+  agex::InputFiles read2;
+  const auto again = agex::apps::collectFrameJobs ({"batch/b.u16", "./ds/frames/f1.pcd"}, read2, "test");
+  fs::current_path (cwd);
+  ASSERT_EQ (again.size (), 2u);
+  EXPECT_EQ (again[0].name, "batch/b.u16");
+  EXPECT_EQ (again[1].name, "ds/f1");
+  // A frame given on its own protects its whole dataset.
+  expectRefusal ([&] { read2.checkOutput (ds + "/labels.csv"); }, {"inside the input dataset"});
+  // Every file read is an input; the dataset's own files too.
+  expectRefusal ([&] { read.checkOutput (ds + "/labels.csv"); }, {"would overwrite an input"});
+
+  // Two different files of one name would share their results' key: refused.
+  const std::string other = tmp.file ("elsewhere/batch");
+  fs::create_directories (other);
+  writeAll (other + "/a.u16", "y");
+  agex::InputFiles read3;
+  expectRefusal ([&] { agex::apps::collectFrameJobs ({dir, other}, read3, "test"); },
+                 {"has the same name 'batch/a.u16'", "separate runs"});
+  expectRefusal ([&] { agex::apps::collectFrameJobs ({tmp.file ("nope")}, read3, "test"); }, {"no such file"});
+}
+
+TEST (FrameJobs, BatchSkipsDoneFramesAndKeepsWhatWasDoneAfterAFailure)
+{
+  TempDir tmp;
+  std::vector<agex::apps::FrameJob> jobs;
+  for (int i = 0; i < 20; ++i)
+    jobs.push_back ({"d/" + std::to_string (i), ""});
+  const std::string path = tmp.file ("r.jsonl");
+  writeAll (path, "{\"frame\":\"d/0\"}\n{\"frame\":\"d/1\"}\n");
+  std::atomic<int> calls{0};
+  {
+    agex::apps::ResultsFile results (path, "test");
+    agex::apps::runFrameBatch (jobs, &results, 4, [&] (const agex::apps::FrameJob &job) {
+      ++calls;
+      return nlohmann::json{{"frame", job.name}};
+    });
+  }
+  EXPECT_EQ (calls.load (), 18) << "the two frames already there are skipped";
+  std::set<std::string> frames;
+  std::istringstream in (readAll (path));
+  int lines = 0;
+  for (std::string line; std::getline (in, line); ++lines)
+    frames.insert (nlohmann::json::parse (line).at ("frame").get<std::string> ());
+  EXPECT_EQ (lines, 20);
+  EXPECT_EQ (frames.size (), 20u);
+
+  // A failing frame stops the run; the frames done are kept and named in the message.
+  const std::string path2 = tmp.file ("r2.jsonl");
+  agex::apps::ResultsFile results (path2, "test");
+  expectRefusal (
+      [&] {
+        agex::apps::runFrameBatch (jobs, &results, 1, [&] (const agex::apps::FrameJob &job) {
+          if (job.name == "d/5")
+            throw std::runtime_error ("d/5: damaged");
+          return nlohmann::json{{"frame", job.name}};
+        });
+      },
+      {"d/5: damaged", "the frames done are kept in " + path2});
+  const std::string written = readAll (path2);
+  EXPECT_EQ (std::count (written.begin (), written.end (), '\n'), 5);
+}
+}  // namespace

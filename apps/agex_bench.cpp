@@ -7,6 +7,7 @@
 //     frame of a dataset, stage by stage, on one core; then frames per second with --jobs.
 
 #include <agex/apps/command_line.h>
+#include <agex/apps/detector_flags.h>
 #include <agex/apps/dataset_selection.h>
 #include <agex/apps/pipeline_flags.h>
 #include <agex/detection/depth_pipeline.h>
@@ -135,11 +136,12 @@ benchView (const std::string &label, const Cloud::Ptr &cloud, const agex::DepthP
 
 /** Milliseconds of each detector stage on one frame, the cloud already in memory. */
 std::vector<std::pair<std::string, double>>
-timeDetector (const Cloud::ConstPtr &cloud, const agex::DetectorModel::ConstPtr &model)
+timeDetector (const Cloud::ConstPtr &cloud, const agex::apps::LoadedDetector &loaded, float fx, float fy)
 {
   const auto start = Clock::now ();
   agex::BodyPartDetector<pcl::PointXYZ> detector;
-  detector.setModel (model);
+  loaded.configure (detector);
+  detector.setFocalLength (fx, fy);
   detector.setInputCloud (cloud);
   std::vector<agex::BodyPartDetection> detections;
   detector.compute (detections);
@@ -155,19 +157,21 @@ timeDetector (const Cloud::ConstPtr &cloud, const agex::DetectorModel::ConstPtr 
 /** The detector over a dataset: per-stage ms (median over passes per frame, then median and
   * 95th percentile over frames) on one thread, then throughput with `jobs` threads. */
 nlohmann::json
-benchDataset (const std::string &spec, bool keyframes_only, const std::string &model_path, int passes, int jobs)
+benchDataset (const std::string &spec, bool keyframes_only, const agex::apps::LoadedDetector &loaded, int passes,
+              int jobs)
 {
   const agex::apps::DatasetSelection selection = agex::apps::selectDataset (spec, keyframes_only);
   if (selection.frame_ids.empty ())
     throw std::runtime_error (spec + ": no frames selected");
-  const auto model = std::make_shared<const agex::DetectorModel> (agex::DetectorModel::load (model_path));
+  const auto &intr = selection.dataset.info ().intrinsics;
+  const float fx = static_cast<float> (intr.fx), fy = static_cast<float> (intr.fy);
 
   // Frames are loaded first: file I/O is not part of the detector.
   std::vector<Cloud::ConstPtr> clouds;
   for (const auto &id : selection.frame_ids)
     clouds.push_back (selection.dataset.loadFrame (id));
 
-  timeDetector (clouds.front (), model);  // warm-up: caches, lazy allocations
+  timeDetector (clouds.front (), loaded, fx, fy);  // warm-up: caches, lazy allocations
   std::vector<std::string> stage_order;
   std::map<std::string, std::vector<double>> per_frame;  // stage -> one median per frame
   agex::apps::Progress progress ("frames", clouds.size ());
@@ -175,7 +179,7 @@ benchDataset (const std::string &spec, bool keyframes_only, const std::string &m
   {
     std::map<std::string, std::vector<double>> runs;
     for (int p = 0; p < passes; ++p)
-      for (const auto &[stage, ms] : timeDetector (clouds[f], model))
+      for (const auto &[stage, ms] : timeDetector (clouds[f], loaded, fx, fy))
       {
         if (f == 0 && p == 0)
           stage_order.push_back (stage);
@@ -203,7 +207,7 @@ benchDataset (const std::string &spec, bool keyframes_only, const std::string &m
   const auto start = Clock::now ();
   jobs = agex::apps::runWorkers (jobs, clouds.size (), [&] () {
     for (std::size_t i = next++; i < clouds.size (); i = next++)
-      timeDetector (clouds[i], model);
+      timeDetector (clouds[i], loaded, fx, fy);
   });
   const double seconds = std::chrono::duration<double> (Clock::now () - start).count ();
   const double fps = seconds > 0 ? clouds.size () / seconds : 0.0;
@@ -211,7 +215,10 @@ benchDataset (const std::string &spec, bool keyframes_only, const std::string &m
                jobs == 1 ? "" : "s", std::thread::hardware_concurrency ());
 
   return {{"dataset", spec},
-          {"model", model_path},
+          {"model", loaded.files.front ()},
+          {"detector_mode", agex::detectorModeName (loaded.mode)},
+          {"forest", loaded.forest ? loaded.files.back () : std::string ()},
+          {"forest_stride", loaded.forest_stride},
           {"frames", clouds.size ()},
           {"width", clouds.front ()->width},
           {"height", clouds.front ()->height},
@@ -228,7 +235,8 @@ main (int argc, char **argv)
   agex::FrameOptions frame_options;
   agex::DepthPipelineParams params;
   std::vector<std::string> vector_flags, inputs;
-  std::string json_path, dataset_spec, model_path = AGEX_BUNDLED_MODEL;
+  std::string json_path, dataset_spec;
+  agex::apps::DetectorChoice choice;
   int k = 20, repeat = 30, passes = 3, jobs = static_cast<int> (std::max (1u, std::thread::hardware_concurrency ()));
   bool no_portrait = false, keyframes_only = false;
 
@@ -239,7 +247,6 @@ main (int argc, char **argv)
   general.add_options () ("help,h", "show this help")
     ("dataset", po::value (&dataset_spec), "time the detector on this dataset's frames (DIR or DIR@1,2,...)")
     ("keyframes", po::bool_switch (&keyframes_only), "with --dataset: keyframes only")
-    ("model", po::value (&model_path)->default_value (model_path), "with --dataset: model (default: bundled)")
     ("passes", po::value (&passes)->default_value (passes), "with --dataset: timed runs per frame")
     ("jobs", po::value (&jobs)->default_value (jobs), "with --dataset: threads for the throughput run")
     ("input", po::value (&inputs)->multitoken (), "frame files (default: the bundled Bonn frame)")
@@ -248,7 +255,8 @@ main (int argc, char **argv)
     ("no-portrait", po::bool_switch (&no_portrait), "skip the 144x176 portrait view of 640x480 frames")
     ("json", po::value (&json_path), "write the figures as JSON here");
   po::options_description all;
-  all.add (general).add (agex::apps::frameOptionsDescription (frame_options))
+  all.add (general).add (agex::apps::detectorOptionsDescription (choice, AGEX_BUNDLED_MODEL))
+     .add (agex::apps::frameOptionsDescription (frame_options))
      .add (agex::apps::pipelineOptionsDescription (params, vector_flags));
   po::positional_options_description positional;
   positional.add ("input", -1);
@@ -269,10 +277,11 @@ main (int argc, char **argv)
       if (!json_path.empty ())
       {
         agex::InputFiles read (agex::apps::datasetFiles (agex::apps::selectDataset (dataset_spec, false).dataset));
-        read.add (model_path);
+        read.add (choice.model);
         read.checkOutput (json_path);
       }
-      const nlohmann::json doc = benchDataset (dataset_spec, keyframes_only, model_path, passes, jobs);
+      const nlohmann::json doc = benchDataset (dataset_spec, keyframes_only, agex::apps::loadDetector (choice), passes,
+                                               jobs);
       if (!json_path.empty ())
         agex::apps::writeJson (json_path, doc);
       return 0;
@@ -282,7 +291,7 @@ main (int argc, char **argv)
     if (!json_path.empty ())
     {
       std::vector<std::string> read = inputs;
-      read.push_back (model_path);
+      read.push_back (choice.model);
       agex::checkOutputIsNotInput (json_path, read);
     }
 

@@ -1,364 +1,44 @@
 // agex_eval: evaluations on labelled agex datasets.
-//   agex_eval coverage --dataset DIR[@SEQ,...] --k K --radius R [--keyframes] --json FILE [--plot FILE.png]
-//   agex_eval detect --dataset DIR[@SEQ,...] [--model M] [--json FILE] [--plots DIR]
+//   agex_eval coverage --dataset DIR[@SEQ,...] [--k K] [--radius R] [--keyframes] [--json FILE] [--plot FILE.png]
+//   agex_eval detect --dataset DIR[@SEQ,...] [--model M] [--detector-mode agex|forest --forest F] [--json FILE]
 //   agex_eval compare --dataset DIR[@SEQ,...] [--model-agex M] [--model-sw M] [--json FILE] [--plots DIR]
+//   agex_eval parts --dataset DIR[@SEQ,...] --forest F [--json FILE] [--overlay-dir DIR]
 // coverage: how often each labelled body part is among the first k AGEX points.
 // detect: precision and recall of the body-part detector.
 // compare: the AGEX detector against the sliding-window baseline (the paper's Fig. 7).
+// parts: per-pixel accuracy of a body-part forest.
 
 #include <agex/apps/command_line.h>
-#include <agex/apps/dataset_selection.h>
+#include <agex/apps/evaluation_runs.h>
+#include <agex/apps/forest_flags.h>
+#include <agex/apps/output_guard.h>
 #include <agex/apps/pipeline_flags.h>
-#include <agex/detection/depth_pipeline.h>
-#include <agex/apps/output.h>
-#include <agex/io/atomic_file.h>
-#include <agex/common/statistics.h>
-#include <agex/detection/body_part_detector.h>
-#include <agex/detection/coverage_evaluation.h>
-#include <agex/detection/detection_evaluation.h>
-#include <agex/io/dataset.h>
-
-#include <filesystem>
 
 #include <boost/program_options.hpp>
 
-#include <algorithm>
-#include <chrono>
-#include <cmath>
-#include <cstdio>
+#include <filesystem>
 #include <iostream>
 
 namespace po = boost::program_options;
-
-namespace
-{
-int
-evaluateCoverage (const agex::apps::DatasetSelection &selection, agex::DepthPipelineParams params, int k,
-                  float radius, bool keyframes_only, bool details, const std::string &json_path,
-                  const std::string &plot_path)
-{
-  constexpr int kCurveMax = 20;
-  const int max_k = std::max (k, kCurveMax);
-  params.k = max_k + 1;  // the centroid and max_k extrema per mesh
-  agex::CoverageEvaluation evaluation (max_k, radius);
-  evaluation.setDetailK (k);
-
-  const agex::Dataset &dataset = selection.dataset;
-  const std::vector<std::string> &ids = selection.frame_ids;
-  agex::apps::Progress progress ("evaluated", ids.size ());
-  double total_ms = 0.0;
-  std::size_t meshes = 0;
-  for (std::size_t i = 0; i < ids.size (); ++i)
-  {
-    const auto cloud = dataset.loadFrame (ids[i]);
-    const agex::DepthPipelineResult result = agex::runDepthPipeline (cloud, params);
-    total_ms += result.ms.back ().second;
-    meshes += result.meshes.size ();
-    evaluation.addFrame (result.interest_points, dataset.labelsOf (ids[i]));
-    progress.step (i + 1);
-  }
-
-  nlohmann::json doc = evaluation.report (k);
-  doc["dataset"] = dataset.directory ();
-  doc["keyframes_only"] = keyframes_only;
-  doc["pipeline_ms_per_frame"] = ids.empty () ? 0.0 : total_ms / ids.size ();
-  doc["meshes_per_frame"] = ids.empty () ? 0.0 : static_cast<double> (meshes) / ids.size ();
-  if (details)
-    doc["labels_detail"] = evaluation.details ();
-  if (!json_path.empty ())
-    agex::apps::writeJson (json_path, doc);
-
-  std::cout << dataset.directory () << ": " << ids.size () << " frames, k = " << k << " extrema, R = " << radius
-            << " m\n";
-  for (int c = 0; c < agex::kBodyPartCount; ++c)
-  {
-    const auto part = static_cast<agex::BodyPart> (c);
-    std::printf ("  %-5s coverage %.3f (centroid counted: %.3f) of %zu labels, orientation median %.1f deg\n",
-                 agex::bodyPartName (part), evaluation.coverage (part, k), evaluation.coverageCountingCentroid (part, k),
-                 evaluation.labelCount (part), evaluation.orientationMedianDeg (part));
-  }
-
-  if (!plot_path.empty ())
-  {
-    agex::apps::Plot plot;
-    plot.title = "AGEX coverage: tips within " + std::to_string (static_cast<int> (radius * 100 + 0.5)) +
-                 " cm of the first k extrema (" + std::to_string (ids.size ()) + " frames)";
-    plot.x_label = "k (extrema)";
-    plot.y_label = "coverage";
-    plot.x_min = 0;
-    plot.x_max = max_k;
-    plot.x_tick = 2;
-    for (int c = 0; c < agex::kBodyPartCount; ++c)
-    {
-      const auto part = static_cast<agex::BodyPart> (c);
-      agex::apps::Plot::Series series{agex::bodyPartName (part), agex::apps::bodyPartColour (c), {}};
-      series.points.emplace_back (0.0, 0.0);
-      for (int kk = 1; kk <= max_k; ++kk)
-        series.points.emplace_back (kk, evaluation.coverage (part, kk));
-      plot.series.push_back (series);
-    }
-    agex::apps::writePng (plot_path, agex::apps::renderPlot (plot));
-  }
-  return 0;
-}
-/** Adds the precision-recall curve of one class to a plot. */
-void
-addPrecisionRecall (agex::apps::Plot &plot, const agex::DetectionEvaluation &evaluation, agex::BodyPart part,
-                    const std::string &label, const cv::Scalar &colour)
-{
-  char name[96];
-  std::snprintf (name, sizeof name, "%s AP %.2f", label.c_str (), evaluation.averagePrecision (part));
-  agex::apps::Plot::Series series{name, colour, {}};
-  for (const auto &[recall, precision] : evaluation.precisionRecall (part))
-    series.points.emplace_back (recall, precision);
-  plot.series.push_back (series);
-}
-
-/** The median of frame times (0 for no frames: a count, not a missing value). */
-double
-medianMs (const std::vector<double> &ms)
-{
-  return ms.empty () ? 0.0 : agex::median (ms);
-}
-
-int
-evaluateDetection (const agex::apps::DatasetSelection &selection, const std::string &model_path, float radius,
-                   const std::string &json_path, const std::string &plots_dir)
-{
-  const auto model = std::make_shared<const agex::DetectorModel> (agex::DetectorModel::load (model_path));
-  model->requireKind (agex::DetectorKind::Agex, model_path);
-  agex::BodyPartDetector<pcl::PointXYZ> detector;
-  detector.setModel (model);
-  agex::DetectionEvaluation evaluation (radius);
-  agex::apps::Progress progress ("evaluated", selection.frame_ids.size ());
-  std::vector<double> frame_ms;
-  for (std::size_t i = 0; i < selection.frame_ids.size (); ++i)
-  {
-    const auto &id = selection.frame_ids[i];
-    const auto cloud = selection.dataset.loadFrame (id);
-    const auto start = std::chrono::steady_clock::now ();
-    detector.setInputCloud (cloud);
-    std::vector<agex::BodyPartDetection> detections;
-    detector.compute (detections);
-    frame_ms.push_back (agex::msSince (start));
-    evaluation.addFrame (detections, selection.dataset.labelsOf (id));
-    progress.step (i + 1);
-  }
-  constexpr float kConfusionThreshold = 0.75f;
-  nlohmann::json doc = evaluation.report (kConfusionThreshold);
-  doc["dataset"] = selection.dataset.directory ();
-  doc["model"] = model_path;
-  doc["ms_per_frame_median"] = medianMs (frame_ms);
-  if (!json_path.empty ())
-    agex::apps::writeJson (json_path, doc);
-  std::cout << selection.dataset.directory () << ": " << selection.frame_ids.size () << " frames\n";
-  for (int c = 0; c < agex::kBodyPartCount; ++c)
-  {
-    const auto part = static_cast<agex::BodyPart> (c);
-    std::printf ("  %-5s AP %.3f, orientation median %.1f deg\n", agex::bodyPartName (part),
-                 evaluation.averagePrecision (part), evaluation.orientationMedianDeg (part));
-  }
-  if (!plots_dir.empty ())
-  {
-    std::filesystem::create_directories (plots_dir);
-    agex::apps::Plot plot;
-    plot.title = "Body-part detection: precision against recall (" + std::to_string (selection.frame_ids.size ()) +
-                 " frames)";
-    plot.x_label = "recall";
-    plot.y_label = "precision";
-    for (int c = 0; c < agex::kBodyPartCount; ++c)
-      addPrecisionRecall (plot, evaluation, static_cast<agex::BodyPart> (c), agex::bodyPartName (static_cast<agex::BodyPart> (c)),
-                          agex::apps::bodyPartColour (c));
-    agex::apps::writePng ((std::filesystem::path (plots_dir) / "precision_recall.png").string (),
-                          agex::apps::renderPlot (plot));
-  }
-  return 0;
-}
-
-/** One detector's side of the comparison. */
-struct Contender
-{
-  Contender (float min_iou, float focal, float radius)
-    : by_overlap (agex::DetectionEvaluation::boxOverlap (min_iou, focal)), by_distance (radius)
-  {
-  }
-  agex::DetectionEvaluation by_overlap, by_distance;
-  std::vector<double> frame_ms;
-  double detections = 0.0, patches = 0.0;
-
-  void add (const std::vector<agex::BodyPartDetection> &detections_found, const std::vector<agex::PartLabel> &labels,
-            double ms, std::size_t patches_classified)
-  {
-    patches += static_cast<double> (patches_classified);
-    by_overlap.addFrame (detections_found, labels);
-    by_distance.addFrame (detections_found, labels);
-    frame_ms.push_back (ms);
-    detections += static_cast<double> (detections_found.size ());
-  }
-  nlohmann::json report () const
-  {
-    auto number = [] (double v) { return std::isfinite (v) ? nlohmann::json (v) : nlohmann::json (nullptr); };
-    nlohmann::json doc;
-    for (int c = 0; c < agex::kBodyPartCount; ++c)
-    {
-      const auto part = static_cast<agex::BodyPart> (c);
-      doc["ap"]["iou"][agex::bodyPartName (part)] = number (by_overlap.averagePrecision (part));
-      doc["ap"]["distance"][agex::bodyPartName (part)] = number (by_distance.averagePrecision (part));
-    }
-    doc["ms_per_frame"] = medianMs (frame_ms);
-    doc["detections_per_frame"] = frame_ms.empty () ? 0.0 : detections / frame_ms.size ();
-    // What the time mostly buys, and unlike it independent of the machine's load.
-    doc["patches_classified_per_frame"] = frame_ms.empty () ? 0.0 : patches / frame_ms.size ();
-    return doc;
-  }
-};
-
-int
-compareDetectors (const agex::apps::DatasetSelection &selection, const std::string &agex_model_path,
-                  const std::string &sw_model_path, const agex::SlidingWindowParams &window_override,
-                  float radius, float min_iou, const std::string &json_path, const std::string &plots_dir)
-{
-  const auto agex_model = std::make_shared<const agex::DetectorModel> (agex::DetectorModel::load (agex_model_path));
-  agex_model->requireKind (agex::DetectorKind::Agex, agex_model_path);
-  const auto sw_model = std::make_shared<const agex::DetectorModel> (agex::DetectorModel::load (sw_model_path));
-  sw_model->requireKind (agex::DetectorKind::SlidingWindow, sw_model_path);
-  agex::BodyPartDetector<pcl::PointXYZ> agex_detector, sw_detector;
-  agex_detector.setModel (agex_model);
-  sw_detector.setModel (sw_model);
-  agex::DetectorSettings sw_settings = sw_model->settings ();
-  if (window_override.stride > 0)
-    sw_settings.sliding_window.stride = window_override.stride;
-  if (!window_override.scales.empty ())
-    sw_settings.sliding_window.scales = window_override.scales;
-  sw_detector.setSettings (sw_settings);
-  const float focal = static_cast<float> (selection.dataset.info ().intrinsics.fx);
-  if (!(focal > 0.f))
-    throw std::runtime_error (selection.dataset.directory () + ": the dataset has no focal length (intrinsics.fx)");
-  constexpr int kContainmentK = 5;
-  Contender agex_side (min_iou, focal, radius), sw_side (min_iou, focal, radius);
-  agex::CoverageEvaluation containment (kContainmentK, radius);
-
-  agex::apps::Progress progress ("compared", selection.frame_ids.size ());
-  for (std::size_t i = 0; i < selection.frame_ids.size (); ++i)
-  {
-    const auto &id = selection.frame_ids[i];
-    const auto cloud = selection.dataset.loadFrame (id);
-    const auto labels = selection.dataset.labelsOf (id);
-
-    auto start = std::chrono::steady_clock::now ();
-    std::vector<agex::BodyPartDetection> found, windows_found;
-    agex_detector.setInputCloud (cloud);
-    agex_detector.compute (found);
-    agex_side.add (found, labels, agex::msSince (start), agex_detector.getPatchesClassified ());
-    containment.addFrame (agex_detector.getIntermediate ().interest_points, labels);
-
-    start = std::chrono::steady_clock::now ();
-    sw_detector.setInputCloud (cloud);
-    sw_detector.compute (windows_found);
-    double ms = agex::msSince (start);
-    // The pipeline also ran AGEX, which the baseline does not need: not its time.
-    for (const auto &[stage, stage_ms] : sw_detector.getIntermediate ().ms)
-      if (stage == "agex")
-        ms -= stage_ms;
-    sw_side.add (windows_found, labels, ms, sw_detector.getPatchesClassified ());
-    progress.step (i + 1);
-  }
-
-  const std::size_t frames = selection.frame_ids.size ();
-  nlohmann::json doc;
-  doc["dataset"] = selection.dataset.directory ();
-  doc["frames"] = frames;
-  doc["criteria"] = {{"iou", {{"min_iou", min_iou},
-                              {"focal_length_px", focal},
-                              {"box_side_m", {{"head", agex::partBoxSide (agex::BodyPart::Head)},
-                                              {"hand", agex::partBoxSide (agex::BodyPart::Hand)},
-                                              {"foot", agex::partBoxSide (agex::BodyPart::Foot)}}}}},
-                     {"distance", {{"radius_m", radius}}}};
-  doc["agex"] = agex_side.report ();
-  doc["agex"]["model"] = agex_model_path;
-  doc["sliding_window"] = sw_side.report ();
-  doc["sliding_window"]["model"] = sw_model_path;
-  doc["sliding_window"]["stride_px"] = sw_settings.sliding_window.stride;
-  doc["sliding_window"]["scales"] = sw_settings.sliding_window.scales;
-  for (int c = 0; c < agex::kBodyPartCount; ++c)
-  {
-    const auto part = static_cast<agex::BodyPart> (c);
-    const std::size_t labels = containment.labelCount (part);
-    // A class without labels has no fraction (null), and its count stays an integer.
-    const nlohmann::json fraction = labels ? nlohmann::json (containment.coverage (part, kContainmentK)) : nlohmann::json ();
-    doc["agex5_containment"][agex::bodyPartName (part)] = {
-        {"contained", containment.coveredCount (part, kContainmentK)}, {"labels", labels}, {"fraction", fraction}};
-  }
-  doc["agex5_containment"]["radius_m"] = radius;
-  if (!json_path.empty ())
-    agex::apps::writeJson (json_path, doc);
-
-  std::cout << selection.dataset.directory () << ": " << frames << " frames\n";
-  for (const auto *side : {&agex_side, &sw_side})
-  {
-    std::printf ("  %-14s %7.1f ms/frame %6.0f patches/frame  AP IoU>%.2f:",
-                 side == &agex_side ? "AGEX" : "sliding window", medianMs (side->frame_ms),
-                 side->patches / std::max<std::size_t> (1, frames), min_iou);
-    for (const auto part : {agex::BodyPart::Head, agex::BodyPart::Hand, agex::BodyPart::Foot})
-      std::printf (" %s %.3f", agex::bodyPartName (part), side->by_overlap.averagePrecision (part));
-    std::printf ("  %.0f cm:", radius * 100.0);
-    for (const auto part : {agex::BodyPart::Head, agex::BodyPart::Hand, agex::BodyPart::Foot})
-      std::printf (" %s %.3f", agex::bodyPartName (part), side->by_distance.averagePrecision (part));
-    std::printf ("\n");
-  }
-  for (const char *part : {"head", "hand", "foot"})
-    std::printf ("  AGEX_5 contains %zu/%zu %s labels\n", doc["agex5_containment"][part]["contained"].get<std::size_t> (),
-                 doc["agex5_containment"][part]["labels"].get<std::size_t> (), part);
-
-  if (!plots_dir.empty ())
-  {
-    std::filesystem::create_directories (plots_dir);
-    for (const auto part : {agex::BodyPart::Head, agex::BodyPart::Hand, agex::BodyPart::Foot})
-    {
-      agex::apps::Plot plot;
-      plot.title = std::string (agex::bodyPartName (part)) + ": AGEX against sliding windows (" +
-                   std::to_string (frames) + " frames)";
-      plot.x_label = "recall";
-      plot.y_label = "precision";
-      char overlap[32], distance[32];
-      std::snprintf (overlap, sizeof overlap, "IoU > %.2g", min_iou);
-      std::snprintf (distance, sizeof distance, "%.0f cm", radius * 100.0);
-      addPrecisionRecall (plot, agex_side.by_overlap, part, std::string ("AGEX, ") + overlap, cv::Scalar (0, 0, 200));
-      addPrecisionRecall (plot, sw_side.by_overlap, part, std::string ("sliding window, ") + overlap,
-                          cv::Scalar (200, 80, 0));
-      addPrecisionRecall (plot, agex_side.by_distance, part, std::string ("AGEX, ") + distance,
-                          cv::Scalar (120, 120, 255));
-      addPrecisionRecall (plot, sw_side.by_distance, part, std::string ("sliding window, ") + distance,
-                          cv::Scalar (240, 190, 120));
-      agex::apps::writePng ((std::filesystem::path (plots_dir) / ("compare_" + std::string (agex::bodyPartName (part)) +
-                                                                   ".png")).string (),
-                            agex::apps::renderPlot (plot));
-    }
-  }
-  return 0;
-}
-}  // namespace
 
 int
 main (int argc, char **argv)
 {
   agex::DepthPipelineParams params;
+  agex::apps::DetectorChoice choice;
+  agex::WeakPartLabelParams weak;
   std::vector<std::string> vector_flags;
-  std::string mode, dataset_dir, json_path, plot_path, plots_dir, model_path = AGEX_BUNDLED_MODEL,
-                                                                    agex_model_path = AGEX_BUNDLED_MODEL,
-                                                                    sw_model_path = AGEX_BUNDLED_SW_MODEL;
-  float min_iou = 0.5f;
-  agex::SlidingWindowParams window_override;
-  window_override.stride = 0;
-  window_override.scales.clear ();
+  std::string mode, dataset_dir, json_path, plot_path, plots_dir, overlay_dir,
+      agex_model_path = AGEX_BUNDLED_MODEL, sw_model_path = AGEX_BUNDLED_SW_MODEL;
+  float min_iou = 0.5f, radius = 0.10f;
+  agex::SlidingWindowParams window_override{0, {}};
   int k = 5;
-  float radius = 0.10f;
   bool keyframes = false, details = false;
 
-  po::options_description general ("agex_eval coverage|detect|compare --dataset DIR[@SEQ,...] [options]\n"
-                                    "Evaluates AGEX coverage or body-part detection on a labelled agex dataset, or\n"
-                                    "compares the AGEX detector with the sliding-window baseline");
-  general.add_options () ("help,h", "show this help") ("mode", po::value (&mode), "coverage, detect or compare")
+  po::options_description general ("agex_eval coverage|detect|compare|parts --dataset DIR[@SEQ,...] [options]\n"
+                                    "Evaluates AGEX coverage, body-part detection or a forest's part labels on a\n"
+                                    "labelled agex dataset, or compares the AGEX detector with the sliding-window baseline");
+  general.add_options () ("help,h", "show this help") ("mode", po::value (&mode), "coverage, detect, compare or parts")
     ("dataset", po::value (&dataset_dir), "dataset directory")
     ("k", po::value (&k)->default_value (k), "number of extrema per mesh scored")
     ("radius", po::value (&radius)->default_value (radius, "0.1"), "metres between a tip and a point that covers it")
@@ -366,9 +46,9 @@ main (int argc, char **argv)
     ("details", po::bool_switch (&details), "list every scored label in the JSON (first rank, nearest point)")
     ("json", po::value (&json_path), "write the report as JSON here")
     ("plot", po::value (&plot_path), "coverage: write the coverage-vs-k curve (k up to 20) as PNG here")
-    ("model", po::value (&model_path)->default_value (model_path), "detect: model file (default: the bundled model)")
     ("plots", po::value (&plots_dir),
      "detect: write precision_recall.png into this directory; compare: compare_{head,hand,foot}.png")
+    ("overlay-dir", po::value (&overlay_dir), "parts: write each frame's part map into this directory")
     ("model-agex", po::value (&agex_model_path)->default_value (agex_model_path), "compare: the AGEX model (default: the bundled model)")
     ("model-sw", po::value (&sw_model_path)->default_value (sw_model_path),
      "compare: the sliding-window model (default: the bundled one)")
@@ -378,16 +58,15 @@ main (int argc, char **argv)
      "compare: pixels between window centres (default: the sliding-window model's)")
     ("window-scales", po::value (&window_override.scales)->multitoken (),
      "compare: window extents over the trained extent (default: the sliding-window model's)");
-  // The pipeline's own --k (points per mesh, centroid included) would make --k
-  // ambiguous; evaluateCoverage sets the pipeline's k from the extrema scored.
-  po::options_description pipeline ("Pipeline (defaults isolate a person 1.3-2.6 m in front of the sensor,\n"
-                                    "within 0.75 m of its optical axis, as in the Bonn frames)");
+  // The pipeline's own --k (points per mesh) would make --k ambiguous: coverage sets it.
+  po::options_description pipeline ("Pipeline (coverage)");
   const po::options_description pipeline_all = agex::apps::pipelineOptionsDescription (params, vector_flags);
   for (const auto &option : pipeline_all.options ())
     if (option->long_name () != "k")
       pipeline.add (option);
   po::options_description all;
-  all.add (general).add (pipeline);
+  all.add (general).add (agex::apps::detectorOptionsDescription (choice, AGEX_BUNDLED_MODEL))
+     .add (agex::apps::weakLabelOptions (weak)).add (pipeline);
   po::positional_options_description positional;
   positional.add ("mode", 1);
 
@@ -396,47 +75,39 @@ main (int argc, char **argv)
     if (!agex::apps::parseCommandLine (argc, argv, all, positional))
       return 0;
     agex::apps::finishPipelineOptions (vector_flags, params);
+    weak.validate ();
     if (dataset_dir.empty ())
       throw std::runtime_error ("--dataset is required (see --help)");
-    if (k < 1 || !(radius > 0.f))
-      throw std::runtime_error ("--k must be at least 1 and --radius positive");
-    if (!plots_dir.empty () && std::filesystem::exists (plots_dir) && !std::filesystem::is_directory (plots_dir))
-      throw std::runtime_error ("--plots " + plots_dir + ": a file, not a directory");
-    if (mode == "compare")
-    {
-      if (!(min_iou > 0.f && min_iou < 1.f))
-        throw std::runtime_error ("--min-iou must lie in (0, 1)");
-      if (window_override.stride < 0 || std::any_of (window_override.scales.begin (), window_override.scales.end (),
-                                                     [] (float s) { return !(s > 0.f) || !std::isfinite (s); }))
-        throw std::runtime_error ("--window-stride must be positive and --window-scales finite and positive");
-      const auto selection = agex::apps::selectDataset (dataset_dir, keyframes);
-      agex::InputFiles read (agex::apps::datasetFiles (selection.dataset));
-      read.add (agex_model_path);
-      read.add (sw_model_path);
-      if (!json_path.empty ())
-        read.checkOutput (json_path);
-      return compareDetectors (selection, agex_model_path, sw_model_path, window_override, radius, min_iou, json_path,
-                               plots_dir);
-    }
-    if (mode == "detect")
-    {
-      auto selection = agex::apps::selectDataset (dataset_dir, keyframes);
-      agex::InputFiles read (agex::apps::datasetFiles (selection.dataset));
-      read.add (model_path);
-      if (!json_path.empty ())
-        read.checkOutput (json_path);
-      return evaluateDetection (std::move (selection), model_path, radius, json_path, plots_dir);
-    }
+    if (k < 1 || k > 200 || !(radius > 0.f && radius <= 1.f) || !(min_iou > 0.f && min_iou < 1.f))
+      throw std::runtime_error ("--k must lie in [1, 200], --radius in (0, 1] m and --min-iou in (0, 1)");
+    if (mode != "coverage" && mode != "detect" && mode != "compare" && mode != "parts")
+      throw std::runtime_error ("unknown mode '" + mode + "' (expected coverage, detect, compare or parts)");
+    const auto selection = agex::apps::selectDataset (dataset_dir, keyframes);
+    agex::InputFiles read;
+    read.addTree (selection.dataset.directory ());
+    for (const auto &model : {choice.model, agex_model_path, sw_model_path, choice.forest})
+      if (!model.empty ())
+        std::filesystem::is_directory (model) ? read.addTree (model) : read.add (model);
+    if (!json_path.empty ())
+      agex::apps::checkOutputPath (json_path, agex::apps::OutputKind::Json, read);
+    if (!plot_path.empty ())
+      agex::apps::checkOutputPath (plot_path, agex::apps::OutputKind::Png, read);
+    for (const auto &dir : {plots_dir, overlay_dir})
+      if (!dir.empty () && std::filesystem::exists (dir) && !std::filesystem::is_directory (dir))
+        throw std::runtime_error (dir + ": a file, not a directory");
+      else if (!dir.empty ())
+        read.checkOutput (dir);
     if (mode == "coverage")
-    {
-      const agex::apps::DatasetSelection selection = agex::apps::selectDataset (dataset_dir, keyframes);
-      const agex::InputFiles read (agex::apps::datasetFiles (selection.dataset));
-      for (const auto &out : {json_path, plot_path})
-        if (!out.empty ())
-          read.checkOutput (out);
-      return evaluateCoverage (selection, params, k, radius, keyframes, details, json_path, plot_path);
-    }
-    throw std::runtime_error ("unknown mode '" + mode + "' (expected coverage, detect or compare)");
+      return agex::apps::evaluateCoverage (selection, params, k, radius, keyframes, details, json_path, plot_path);
+    if (mode == "compare")
+      return agex::apps::compareDetectors (selection, agex_model_path, sw_model_path, window_override, radius, min_iou,
+                                           json_path, plots_dir);
+    if (mode == "parts" && choice.forest.empty ())
+      throw std::runtime_error ("agex_eval parts needs --forest");
+    const agex::apps::LoadedDetector loaded = agex::apps::loadDetector (choice);
+    if (mode == "parts")
+      return agex::apps::evaluatePartLabels (selection, loaded, weak, json_path, overlay_dir);
+    return agex::apps::evaluateDetection (selection, loaded, radius, json_path, plots_dir);
   }
   catch (const std::exception &e)
   {

@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <stdexcept>
 
 namespace agex
@@ -142,6 +143,74 @@ renderDetections (const pcl::PointCloud<pcl::PointXYZ> &frame, const std::vector
     cv::putText (image, text, centre + cv::Point (12, -8), cv::FONT_HERSHEY_SIMPLEX, 0.55, cv::Scalar (0, 0, 0), 3,
                  cv::LINE_AA);
     cv::putText (image, text, centre + cv::Point (12, -8), cv::FONT_HERSHEY_SIMPLEX, 0.55, colour, 1, cv::LINE_AA);
+  }
+  return image;
+}
+
+namespace
+{
+cv::Vec3b
+partColour (int part)
+{
+  switch (part)
+  {
+  case kLabelHead: return {60, 60, 230};        // red (BGR)
+  case kLabelHand: return {60, 220, 60};        // green
+  case kLabelFoot: return {230, 120, 40};       // blue
+  case kLabelOtherBody: return {40, 200, 230};  // yellow
+  default: return {160, 60, 160};               // magenta: a labelled pixel of no part
+  }
+}
+}  // namespace
+
+cv::Mat
+renderPartLabels (const pcl::PointCloud<pcl::PointXYZ> &frame, const pcl::PointCloud<BodyPartLabelPoint> &labels,
+                  const std::vector<PartMode> &modes, const std::vector<PartLabel> &truth)
+{
+  const int width = static_cast<int> (frame.width), height = static_cast<int> (frame.height);
+  float zmin = std::numeric_limits<float>::max (), zmax = 0.f;
+  for (const auto &p : frame.points)
+    if (std::isfinite (p.z))
+      zmin = std::min (zmin, p.z), zmax = std::max (zmax, p.z);
+  cv::Mat image (height, width, CV_8UC3, cv::Scalar (0, 0, 0));
+  const bool same_grid = labels.width == frame.width && labels.height == frame.height;
+  for (int v = 0; v < height; ++v)
+    for (int u = 0; u < width; ++u)
+    {
+      const float z = frame (u, v).z;
+      if (std::isfinite (z))
+      {
+        const float t = zmax > zmin ? (z - zmin) / (zmax - zmin) : 0.f;
+        const auto g = static_cast<unsigned char> (50 + 140 * (1.f - t));
+        image.at<cv::Vec3b> (v, u) = cv::Vec3b (g, g, g);
+      }
+      if (!same_grid)
+        continue;
+      const auto &q = labels (u, v);
+      if (!std::isfinite (q.z) || q.label == kLabelNone)
+        continue;
+      const cv::Vec3b c = partColour (q.label);
+      cv::Vec3b &px = image.at<cv::Vec3b> (v, u);
+      for (int k = 0; k < 3; ++k)
+        px[k] = static_cast<unsigned char> ((px[k] + 3 * c[k]) / 4);
+    }
+  const int scale = std::max (1, 480 / std::max (1, height));
+  if (scale > 1)
+    cv::resize (image, image, cv::Size (), scale, scale, cv::INTER_NEAREST);
+  auto pixel = [scale] (float u, float v) {
+    return cv::Point (static_cast<int> ((u + 0.5f) * scale), static_cast<int> ((v + 0.5f) * scale));
+  };
+  for (const auto &l : truth)
+    if (l.visible && l.tip_px.allFinite ())
+      cv::circle (image, pixel (l.tip_px.x (), l.tip_px.y ()), 7, cv::Scalar (255, 255, 255), 1, cv::LINE_AA);
+  for (const auto &m : modes)
+  {
+    if (m.confidence < 0.3f || m.tip_index < 0 || width <= 0)
+      continue;
+    const cv::Point p = pixel (static_cast<float> (m.tip_index % width), static_cast<float> (m.tip_index / width));
+    const cv::Vec3b c = partColour (m.part);
+    cv::drawMarker (image, p, cv::Scalar (c[0], c[1], c[2]), cv::MARKER_CROSS, 14, 2);
+    cv::drawMarker (image, p, cv::Scalar (0, 0, 0), cv::MARKER_CROSS, 14, 1);
   }
   return image;
 }

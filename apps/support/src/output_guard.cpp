@@ -173,6 +173,25 @@ checkOutputPath (const std::string &path, OutputKind kind, const InputFiles &inp
     if (!isAgexPng (readHead (path, 1 << 16)))
       refuse (path, "exists and is not a PNG written by agex; choose another path or remove it");
     return;
+  case OutputKind::Forest:
+    if (readHead (path, 8) != "AGEXFRST")
+      refuse (path, "exists and is not an agex forest file; choose another path or remove it");
+    return;
+  case OutputKind::Json:
+  {
+    std::ifstream in (path, std::ios::binary);
+    bool object = false;
+    try
+    {
+      object = nlohmann::json::parse (in).is_object ();
+    }
+    catch (const std::exception &)
+    {
+    }
+    if (!object)
+      refuse (path, "exists and is not a JSON report; choose another path or remove it");
+    return;
+  }
   case OutputKind::JsonLines:
   case OutputKind::Dataset:
     return;

@@ -1,5 +1,8 @@
 #pragma once
 
+#include <agex/classification/body_part_forest.h>
+#include <agex/classification/body_part_label_point.h>
+#include <agex/classification/part_modes.h>
 #include <agex/detection/body_part_detection.h>
 #include <agex/detection/depth_pipeline.h>
 #include <agex/detection/detector_model.h>
@@ -11,6 +14,17 @@
 
 namespace agex
 {
+/** What a detector names parts with. */
+enum class DetectorMode
+{
+  Agex,    ///< the model's classifier on AGEX points (or sliding windows, for such a model)
+  Forest,  ///< the per-pixel body-part forest alone: one detection per part mode
+};
+/** "agex", "forest". */
+const char *detectorModeName (DetectorMode mode);
+/** Inverse of detectorModeName; false for an unknown name. */
+bool parseDetectorMode (const std::string &name, DetectorMode &mode);
+
 /** \brief Heads, hands and feet in one organized depth frame: the whole agex detector as
   * the apps run it, in the spirit of pcl::people::GroundBasedPeopleDetectionApp.
   *
@@ -57,9 +71,38 @@ public:
   void setSettings (const DetectorSettings &settings);
   const DetectorSettings &getSettings () const { return settings_; }
 
+  /** The per-pixel body-part forest (our model file or PCL's trees, BodyPartForest::load).
+    * With a forest, the meshes' pixels are labelled in every mode (getPartLabels). */
+  void setForest (const BodyPartForest::ConstPtr &forest) { forest_ = forest; }
+  const BodyPartForest::ConstPtr &getForest () const { return forest_; }
+
+  /** How parts are named (default Agex). Forest needs setForest. */
+  void setMode (DetectorMode mode) { mode_ = mode; }
+  DetectorMode getMode () const { return mode_; }
+
+  /** \brief Focal lengths of the camera in pixels, for the forest's depth-scaled offsets
+    * and the part modes' areas; 0 (the default): estimated from the cloud (a pinhole fit,
+    * agex::DepthPatchEstimation::estimateFocalLength). */
+  void setFocalLength (float fx, float fy)
+  {
+    fx_ = fx;
+    fy_ = fy;
+  }
+
+  /** Pixel stride of the forest pass (1: every person pixel; 2: one per 2x2 cell, the rest
+    * copy it). */
+  void setForestStride (int stride) { forest_stride_ = stride; }
+  int getForestStride () const { return forest_stride_; }
+
   /** \brief Runs the detector on the input cloud; detections sorted by confidence.
-    * Without a model, reports an error (PCL_ERROR) and gives none. */
+    * Without a model (or, in Forest mode, a forest), reports an error (PCL_ERROR) and gives
+    * none. */
   void compute (std::vector<BodyPartDetection> &detections);
+
+  /** The last compute ()'s part labels (organized like the input; empty unless the forest
+    * ran) and part modes. */
+  const pcl::PointCloud<BodyPartLabelPoint> &getPartLabels () const { return part_labels_; }
+  const std::vector<PartMode> &getPartModes () const { return part_modes_; }
 
   /** What the last compute () saw on the way: the filtered cloud, meshes, AGEX points,
     * floor plane, and per-stage milliseconds (the pipeline's stages, then patches and
@@ -77,11 +120,21 @@ private:
   /** Names the AGEX points (or, windows, classifies the sliding windows) of the
     * intermediate result, appending the "patches" and "classify" timings. */
   void classify (std::vector<BodyPartDetection> &detections, bool windows);
+  /** Labels the meshes' pixels with the forest and finds the part modes ("forest" timing). */
+  bool labelParts ();
+  /** One detection per part mode, suppressed and sorted ("classify" timing). */
+  void detectFromModes (std::vector<BodyPartDetection> &detections);
 
   DetectorModel::ConstPtr model_;
   DetectorSettings settings_;
   DepthPipelineResult intermediate_;
   std::size_t patches_classified_ = 0;
+  BodyPartForest::ConstPtr forest_;
+  DetectorMode mode_ = DetectorMode::Agex;
+  float fx_ = 0.f, fy_ = 0.f;
+  int forest_stride_ = 1;
+  pcl::PointCloud<BodyPartLabelPoint> part_labels_;
+  std::vector<PartMode> part_modes_;
 };
 }  // namespace agex
 

@@ -2,8 +2,11 @@
 // What the apps write: JSON documents and overlay PNGs, always atomically (and PNGs marked
 // as agex's, see output_guard.h).
 
+#include <agex/classification/body_part_label_point.h>
+#include <agex/classification/part_modes.h>
 #include <agex/common/point_types.h>
 #include <agex/detection/body_part_detection.h>
+#include <agex/io/dataset.h>
 
 #include <pcl/PointIndices.h>
 #include <pcl/point_cloud.h>
@@ -63,5 +66,12 @@ cv::Scalar bodyPartColour (int part);
   * confidence and orientation arrow (the most confident drawn last). */
 cv::Mat renderDetections (const pcl::PointCloud<pcl::PointXYZ> &frame, const std::vector<pcl::PointIndices> &meshes,
                           const std::vector<BodyPartDetection> &detections, float min_confidence);
+/** \brief The part map of a frame: depth grey (near bright) with the part labels blended over
+  * the labelled pixels (head red, hand green, foot blue, other body yellow, a labelled pixel
+  * of no part magenta), the labelled tips (truth, may be empty) as white circles and the tips
+  * of part modes of confidence >= 0.3 as crosses in their part's colour. Frames under 480
+  * rows are enlarged by a whole factor. */
+cv::Mat renderPartLabels (const pcl::PointCloud<pcl::PointXYZ> &frame, const pcl::PointCloud<BodyPartLabelPoint> &labels,
+                          const std::vector<PartMode> &modes, const std::vector<PartLabel> &truth);
 }  // namespace apps
 }  // namespace agex

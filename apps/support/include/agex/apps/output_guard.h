@@ -18,6 +18,8 @@ enum class OutputKind
   JsonDocument,  ///< a pretty-printed JSON object with a "frame" (one frame's result)
   JsonLines,     ///< one JSON line per frame (runs over several frames; ResultsFile checks the lines)
   Png,           ///< a PNG that agex wrote (writePng marks it; see isAgexPng)
+  Forest,        ///< an agex body-part forest file (starts with its AGEXFRST magic)
+  Json,          ///< any JSON document agex wrote (a report): a file that parses as a JSON object
 };
 
 /** \brief Refuses an output path unless writing there loses nothing: the path must not be an
@@ -25,7 +27,8 @@ enum class OutputKind
   * if something is there already it must be an earlier output of the same kind: for Dataset
   * an agex dataset holding only its own files (agex::datasetReplaceProblem), replaced only
   * with force; for JsonDocument a JSON object with a "frame", not a JSON-lines file; for
-  * JsonLines a regular file; for Png a PNG agex wrote. An empty regular file holds nothing and
+  * JsonLines a regular file; for Png a PNG agex wrote; for Forest a forest file; for
+  * Json a JSON object. An empty regular file holds nothing and
   * may be replaced by any kind of file.
   * \throws std::runtime_error naming the path and why */
 void checkOutputPath (const std::string &path, OutputKind kind, const InputFiles &inputs, bool force = false);

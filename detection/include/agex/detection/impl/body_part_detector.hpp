@@ -1,10 +1,12 @@
 #pragma once
 
+#include <agex/classification/body_part_labeling.h>
 #include <agex/classification/non_maximum_suppression.h>
 #include <agex/classification/sliding_window_detector.h>
 #include <agex/common/statistics.h>
 #include <agex/detection/body_part_detector.h>
 #include <agex/detection/training_samples.h>
+#include <agex/features/depth_patch_estimation.h>
 
 #include <algorithm>
 #include <chrono>
@@ -40,9 +42,16 @@ agex::BodyPartDetector<PointT>::compute (std::vector<BodyPartDetection> &detecti
   detections.clear ();
   intermediate_ = DepthPipelineResult ();
   patches_classified_ = 0;
+  part_labels_.clear ();
+  part_modes_.clear ();
   if (!model_ || !model_->valid ())
   {
     PCL_ERROR ("[agex::BodyPartDetector::compute] No model was given (setModel or fromModel).\n");
+    return;
+  }
+  if (mode_ == DetectorMode::Forest && !forest_)
+  {
+    PCL_ERROR ("[agex::BodyPartDetector::compute] The forest mode needs a forest (setForest).\n");
     return;
   }
   DepthPipeline<PointT> pipeline (settings_.pipeline);
@@ -50,14 +59,94 @@ agex::BodyPartDetector<PointT>::compute (std::vector<BodyPartDetection> &detecti
   if (use_indices_)
     pipeline.setIndices (indices_);
   pipeline.compute (intermediate_);
-  const double pipeline_ms = intermediate_.ms.empty () ? 0.0 : intermediate_.ms.back ().second;
-  intermediate_.ms.pop_back ();  // the total, given again below with the classifier's stages
+  double total = intermediate_.ms.empty () ? 0.0 : intermediate_.ms.back ().second;
+  intermediate_.ms.pop_back ();  // the total, given again below with the later stages'
+  const std::size_t first_later_stage = intermediate_.ms.size ();
 
-  classify (detections, settings_.kind == DetectorKind::SlidingWindow);
-  double total = pipeline_ms;
-  for (auto it = intermediate_.ms.end () - 2; it != intermediate_.ms.end (); ++it)
-    total += it->second;
+  // With a forest the pixels are labelled in every mode (getPartLabels); the forest mode
+  // also names the parts from them.
+  const bool labelled = forest_ && labelParts ();
+  if (mode_ == DetectorMode::Forest)
+  {
+    if (labelled)
+      detectFromModes (detections);
+  }
+  else
+    classify (detections, settings_.kind == DetectorKind::SlidingWindow);
+  for (std::size_t i = first_later_stage; i < intermediate_.ms.size (); ++i)
+    total += intermediate_.ms[i].second;
   intermediate_.ms.emplace_back ("total", total);
+}
+
+template <typename PointT> bool
+agex::BodyPartDetector<PointT>::labelParts ()
+{
+  const auto start = std::chrono::steady_clock::now ();
+  const DepthPipelineResult &prepared = intermediate_;
+  bool ok = false;
+  if (prepared.filtered && !prepared.meshes.empty ())
+  {
+    float fx = fx_, fy = fy_;
+    if (!(fx > 0.f) || !(fy > 0.f))
+      fx = fy = DepthPatchEstimation<pcl::PointXYZ, DepthPatch>::estimateFocalLength (*prepared.filtered);
+    if (fx > 0.f && fy > 0.f)
+    {
+      const std::vector<int> body = prepared.meshIndices ();
+      BodyPartLabeling<pcl::PointXYZ> labeling;
+      labeling.setInputCloud (prepared.filtered);
+      labeling.setIndices (std::make_shared<pcl::Indices> (body.begin (), body.end ()));
+      labeling.setForest (forest_);
+      labeling.setFocalLength (fx, fy);
+      labeling.setStride (forest_stride_);
+      ok = labeling.compute (part_labels_);
+      if (ok)
+      {
+        PartModeEstimation modes;
+        PartModeParams params;
+        params.fx = fx;
+        params.fy = fy;
+        modes.setParams (params);
+        ok = modes.compute (part_labels_, part_modes_);
+      }
+    }
+  }
+  intermediate_.ms.emplace_back ("forest", msSince (start));
+  return ok;
+}
+
+template <typename PointT> void
+agex::BodyPartDetector<PointT>::detectFromModes (std::vector<BodyPartDetection> &detections)
+{
+  const auto start = std::chrono::steady_clock::now ();
+  std::vector<BodyPartDetection> candidates;
+  const int width = static_cast<int> (part_labels_.width);
+  for (const PartMode &m : part_modes_)
+  {
+    if (m.part < 0 || m.part >= kBodyPartCount || m.tip_index < 0 || width <= 0 || !m.tip.allFinite ())
+      continue;
+    BodyPartDetection d;
+    d.part = static_cast<BodyPart> (m.part);
+    d.confidence = m.confidence;
+    d.margin = m.mass;
+    d.position = m.tip;
+    d.orientation = m.direction;
+    d.u = m.tip_index % width;
+    d.v = m.tip_index / width;
+    candidates.push_back (d);
+  }
+  std::vector<Eigen::Vector3f> positions;
+  std::vector<int> parts;
+  std::vector<float> scores;
+  for (const auto &d : candidates)
+  {
+    positions.push_back (d.position);
+    parts.push_back (static_cast<int> (d.part));
+    scores.push_back (d.confidence);
+  }
+  for (const std::size_t i : agex::suppressNonMaxima (positions, parts, scores, settings_.suppression_radius))
+    detections.push_back (candidates[i]);
+  patches_classified_ = candidates.size ();
+  intermediate_.ms.emplace_back ("modes", msSince (start));
 }
 
 template <typename PointT> void

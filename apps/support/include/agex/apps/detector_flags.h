@@ -1,0 +1,49 @@
+#pragma once
+// The flags that choose a detector (--model, --forest, --detector-mode, --forest-stride),
+// shared by agex_detect, agex_eval and agex_bench, and the detector they load.
+
+#include <agex/detection/body_part_detector.h>
+#include <agex/io/frame_io.h>
+
+#include <boost/program_options/options_description.hpp>
+
+#include <string>
+#include <vector>
+
+namespace agex
+{
+namespace apps
+{
+/** What the flags asked for. */
+struct DetectorChoice
+{
+  std::string model;   ///< model file (default: the bundled model)
+  std::string forest;  ///< forest: our model file, a PCL tree file or a directory of them
+  std::string mode = "agex";
+  int forest_stride = 1;
+};
+
+/** --model, --forest, --detector-mode, --forest-stride; model_default is --model's default. */
+boost::program_options::options_description detectorOptionsDescription (DetectorChoice &choice,
+                                                                        const std::string &model_default);
+
+/** A loaded detector's parts, shared by every thread's BodyPartDetector. */
+struct LoadedDetector
+{
+  DetectorModel::ConstPtr model;
+  BodyPartForest::ConstPtr forest;
+  DetectorMode mode = DetectorMode::Agex;
+  int forest_stride = 1;
+
+  /** Gives detector the model, forest, mode and stride. */
+  void configure (BodyPartDetector<pcl::PointXYZ> &detector) const;
+  /** The files it was loaded from (what no output may overwrite). */
+  std::vector<std::string> files;
+};
+
+/** \brief Loads what choice names, checking the combination: an AGEX model for the agex
+  * mode (kind the kind asked for), a forest for the forest mode.
+  * \throws std::runtime_error or agex::ModelError naming the flag or the file */
+LoadedDetector loadDetector (const DetectorChoice &choice, DetectorKind kind = DetectorKind::Agex);
+}  // namespace apps
+}  // namespace agex

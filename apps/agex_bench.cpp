@@ -216,7 +216,7 @@ benchDataset (const std::string &spec, bool keyframes_only, const agex::apps::Lo
 
   return {{"dataset", spec},
           {"model", loaded.files.front ()},
-          {"detector_mode", agex::detectorModeName (loaded.mode)},
+          {"detector_mode", loaded.mode_name},
           {"forest", loaded.forest ? loaded.files.back () : std::string ()},
           {"forest_stride", loaded.forest_stride},
           {"frames", clouds.size ()},

@@ -93,7 +93,7 @@ main (int argc, char **argv)
       detector.compute (detections);
       const agex::DepthPipelineResult &prepared = detector.getIntermediate ();
       nlohmann::json doc = {{"frame", job.name}, {"path", job.path}, {"width", frame.cloud->width},
-                            {"height", frame.cloud->height}, {"detector_mode", choice.mode},
+                            {"height", frame.cloud->height}, {"detector_mode", loaded.mode_name},
                             {"detections", nlohmann::json::array ()}};
       for (const auto &d : detections)
         doc["detections"].push_back (agex::toJson (d));

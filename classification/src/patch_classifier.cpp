@@ -33,6 +33,8 @@ constexpr std::size_t kMetadataChunk = 1000;
 constexpr char kChunkFence = '|';
 /** classify () keeps features on the stack up to this many fragments. */
 constexpr std::size_t kStackFeatures = 2048;
+/** Most auxiliary features a classifier may have (a bound for damaged files too). */
+constexpr std::size_t kMaxAuxiliaryFeatures = 1024;
 
 using detail::readInt;
 using detail::readReal;
@@ -199,15 +201,23 @@ checkTrainingSet (const std::vector<agex::DepthPatch> &patches, const std::vecto
   return set;
 }
 
-/** Every feature of every patch, once: N x F floats, rows in parallel (each row is
-  * independent, so the result does not depend on the threads). */
+/** Every feature of every patch, once: N x (F + A) floats (the fragments, then the
+  * auxiliary features), rows in parallel (each row is independent, so the result does not
+  * depend on the threads). */
 cv::Mat
-featureRows (const FragmentDictionary &dictionary, const std::vector<agex::DepthPatch> &patches)
+featureRows (const FragmentDictionary &dictionary, const std::vector<agex::DepthPatch> &patches,
+             const std::vector<std::vector<float>> &auxiliary, std::size_t auxiliary_count)
 {
-  cv::Mat samples (static_cast<int> (patches.size ()), static_cast<int> (dictionary.size ()), CV_32F);
+  const int fragments = static_cast<int> (dictionary.size ());
+  cv::Mat samples (static_cast<int> (patches.size ()), fragments + static_cast<int> (auxiliary_count), CV_32F);
   cv::parallel_for_ (cv::Range (0, samples.rows), [&] (const cv::Range &range) {
     for (int i = range.start; i < range.end; ++i)
-      dictionary.computeFeatures (patches[static_cast<std::size_t> (i)], samples.ptr<float> (i));
+    {
+      float *row = samples.ptr<float> (i);
+      dictionary.computeFeatures (patches[static_cast<std::size_t> (i)], row);
+      for (std::size_t a = 0; a < auxiliary_count; ++a)
+        row[fragments + static_cast<int> (a)] = auxiliary[static_cast<std::size_t> (i)][a];
+    }
   });
   return samples;
 }
@@ -412,16 +422,42 @@ void
 PatchClassifier::train (const std::vector<agex::DepthPatch> &patches, const std::vector<int> &labels, int classes,
                         const PatchClassifierParams &params, const std::function<void (int, int)> &progress)
 {
+  train (patches, {}, {}, labels, classes, params, progress);
+}
+
+void
+PatchClassifier::train (const std::vector<agex::DepthPatch> &patches, const std::vector<std::vector<float>> &auxiliary,
+                        const std::vector<std::string> &auxiliary_names, const std::vector<int> &labels, int classes,
+                        const PatchClassifierParams &params, const std::function<void (int, int)> &progress)
+{
   const TrainingSet set = checkTrainingSet (patches, labels, classes, params);
+  if (auxiliary_names.size () > kMaxAuxiliaryFeatures)
+    throw std::invalid_argument ("PatchClassifier::train: more than " + std::to_string (kMaxAuxiliaryFeatures) +
+                                 " auxiliary features");
+  if (!auxiliary_names.empty () && auxiliary.size () != patches.size ())
+    throw std::invalid_argument ("PatchClassifier::train: " + std::to_string (auxiliary.size ()) +
+                                 " rows of auxiliary features for " + std::to_string (patches.size ()) + " patches");
+  for (std::size_t i = 0; i < auxiliary.size () && !auxiliary_names.empty (); ++i)
+  {
+    if (auxiliary[i].size () != auxiliary_names.size ())
+      throw std::invalid_argument ("PatchClassifier::train: auxiliary row " + std::to_string (i) + " has " +
+                                   std::to_string (auxiliary[i].size ()) + " values, not " +
+                                   std::to_string (auxiliary_names.size ()));
+    for (const float v : auxiliary[i])
+      if (!std::isfinite (v))
+        throw std::invalid_argument ("PatchClassifier::train: auxiliary row " + std::to_string (i) +
+                                     " has a non-finite value");
+  }
   FragmentDictionary dictionary;
   dictionary.build (set.positives, params.dictionary);
-  const cv::Mat samples = featureRows (dictionary, patches);
+  const cv::Mat samples = featureRows (dictionary, patches, auxiliary, auxiliary_names.size ());
   const int workers = std::max (1, std::min (classes, cv::getNumThreads ()));
   auto boosters = trainBoosters (
       classes, workers, [&] (int c) { return trainBooster (samples, labels, c, params); }, progress);
 
   PatchClassifier trained;
   trained.dictionary_ = std::move (dictionary);
+  trained.auxiliary_names_ = auxiliary_names;
   trained.boosters_ = std::move (boosters);
   trained.geometry_.size = set.size;
   trained.geometry_.extent = static_cast<float> (set.size) * set.pitch;
@@ -441,7 +477,8 @@ PatchClassifier::train (const std::vector<agex::DepthPatch> &patches, const std:
 void
 PatchClassifier::prepare ()
 {
-  const int features = static_cast<int> (dictionary_.size ());
+  const int fragments = static_cast<int> (dictionary_.size ());
+  const int features = fragments + static_cast<int> (auxiliary_names_.size ());
   std::vector<ClassTrees> all;
   std::vector<char> used (static_cast<std::size_t> (features), 0);
   for (std::size_t c = 0; c < boosters_.size (); ++c)
@@ -451,8 +488,8 @@ PatchClassifier::prepare ()
     if (!b || !b->isTrained ())
       throw ModelError (where + "not trained");
     if (b->getVarCount () != features)
-      throw ModelError (where + "uses " + std::to_string (b->getVarCount ()) + " features, the dictionary has " +
-                        std::to_string (features));
+      throw ModelError (where + "uses " + std::to_string (b->getVarCount ()) + " features, the dictionary and the " +
+                        "auxiliary features have " + std::to_string (features));
     const std::vector<int> &roots = b->getRoots ();
     const std::vector<cv::ml::DTrees::Node> &nodes = b->getNodes ();
     const std::vector<cv::ml::DTrees::Split> &splits = b->getSplits ();
@@ -522,7 +559,7 @@ PatchClassifier::prepare ()
     all.push_back (std::move (trees));
   }
   std::vector<int> list;
-  for (int f = 0; f < features; ++f)
+  for (int f = 0; f < fragments; ++f)  // the auxiliary features are given, not computed
     if (used[static_cast<std::size_t> (f)])
       list.push_back (f);
   trees_ = std::move (all);
@@ -532,6 +569,16 @@ PatchClassifier::prepare ()
 void
 PatchClassifier::classify (const agex::DepthPatch &patch, float *margins, float *confidences) const
 {
+  classify (patch, nullptr, margins, confidences);
+}
+
+void
+PatchClassifier::classify (const agex::DepthPatch &patch, const float *auxiliary, float *margins,
+                           float *confidences) const
+{
+  if (!auxiliary && !auxiliary_names_.empty ())
+    throw std::invalid_argument ("PatchClassifier::classify: the classifier needs " +
+                                 std::to_string (auxiliary_names_.size ()) + " auxiliary features");
   if (!trained ())
     throw std::logic_error ("PatchClassifier::classify: the classifier is not trained");
   if (patch.size != geometry_.size)
@@ -540,12 +587,14 @@ PatchClassifier::classify (const agex::DepthPatch &patch, float *margins, float 
   float stack[kStackFeatures];
   std::vector<float> heap;
   float *features = stack;
-  if (dictionary_.size () > kStackFeatures)
+  const std::size_t count = dictionary_.size () + auxiliary_names_.size ();
+  if (count > kStackFeatures)
   {
-    heap.resize (dictionary_.size ());
+    heap.resize (count);
     features = heap.data ();
   }
   dictionary_.computeFeatures (patch, used_fragments_, features);
+  std::copy (auxiliary, auxiliary + auxiliary_names_.size (), features + dictionary_.size ());
   for (std::size_t c = 0; c < trees_.size (); ++c)
   {
     // cv::ml::DTreesImpl::predictTrees with PREDICT_SUM: trees in order, a double sum,
@@ -594,7 +643,8 @@ PatchClassifier::save (const std::string &path, const nlohmann::json &metadata) 
 
   cv::FileStorage fs (".yml", cv::FileStorage::WRITE | cv::FileStorage::MEMORY | cv::FileStorage::FORMAT_YAML);
   fs.write ("format", std::string (kFormatName));
-  fs << "format_version" << kFormatVersion;
+  // A patch-only classifier stays a version-1 file, readable by earlier agex releases.
+  fs << "format_version" << (auxiliary_names_.empty () ? 1 : kFormatVersion);
   fs << "classes" << classes ();
   fs << "patch" << "{";
   fs << "size" << geometry_.size << "extent" << geometry_.extent << "clamp" << geometry_.clamp;
@@ -610,6 +660,13 @@ PatchClassifier::save (const std::string &path, const nlohmann::json &metadata) 
   fs << "dictionary" << "{";
   dictionary_.write (fs);
   fs << "}";
+  if (!auxiliary_names_.empty ())
+  {
+    fs << "auxiliary_features" << "[";
+    for (const auto &name : auxiliary_names_)
+      fs.write (cv::String (), kChunkFence + name + kChunkFence);
+    fs << "]";
+  }
   fs << "boosters" << "[";
   for (std::size_t c = 0; c < boosters_.size (); ++c)
   {
@@ -663,7 +720,7 @@ PatchClassifier::load (const std::string &path)
   const cv::FileNode version = fs["format_version"];
   if (version.empty () || !version.isInt ())
     throw ModelError (path + ": damaged model file (missing or invalid format_version)");
-  if (static_cast<int> (version) != kFormatVersion)
+  if (static_cast<int> (version) != 1 && static_cast<int> (version) != kFormatVersion)
     throw ModelError (path + ": model format version " + std::to_string (static_cast<int> (version)) +
                       " is not supported (this build reads " + std::to_string (kFormatVersion) + ")");
   const cv::FileNode end = fs["end"];
@@ -734,10 +791,25 @@ PatchClassifier::load (const std::string &path)
                           "-class model");
     model.params_.dictionary = model.dictionary_.params ();
 
+    const cv::FileNode auxiliary = fs["auxiliary_features"];
+    if (!auxiliary.empty ())
+    {
+      if (static_cast<int> (version) < 2 || !auxiliary.isSeq () || auxiliary.size () > kMaxAuxiliaryFeatures)
+        throw ModelError ("invalid auxiliary_features");
+      for (cv::FileNodeIterator it = auxiliary.begin (); it != auxiliary.end (); ++it)
+      {
+        if (!(*it).isString ())
+          throw ModelError ("invalid auxiliary feature name");
+        const std::string name = static_cast<std::string> (*it);
+        if (name.size () < 2 || name.size () > 130 || name.front () != kChunkFence || name.back () != kChunkFence)
+          throw ModelError ("invalid auxiliary feature name");
+        model.auxiliary_names_.push_back (name.substr (1, name.size () - 2));
+      }
+    }
     const cv::FileNode boosters = fs["boosters"];
     if (boosters.empty () || !boosters.isSeq () || static_cast<int> (boosters.size ()) != classes)
       throw ModelError ("need " + std::to_string (classes) + " boosters");
-    const int features = static_cast<int> (model.dictionary_.size ());
+    const int features = static_cast<int> (model.dictionary_.size () + model.auxiliary_names_.size ());
     int c = 0;
     for (cv::FileNodeIterator it = boosters.begin (); it != boosters.end (); ++it, ++c)
     {

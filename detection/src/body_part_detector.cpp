@@ -7,13 +7,13 @@ namespace agex
 const char *
 detectorModeName (DetectorMode mode)
 {
-  return mode == DetectorMode::Forest ? "forest" : "agex";
+  return mode == DetectorMode::Forest ? "forest" : "model";
 }
 
 bool
 parseDetectorMode (const std::string &name, DetectorMode &mode)
 {
-  for (const DetectorMode m : {DetectorMode::Agex, DetectorMode::Forest})
+  for (const DetectorMode m : {DetectorMode::Model, DetectorMode::Forest})
     if (name == detectorModeName (m))
     {
       mode = m;

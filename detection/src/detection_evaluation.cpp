@@ -213,4 +213,53 @@ DetectionEvaluation::report (float threshold) const
                           "columns: the detection's class, or none for tips without a detection at or above the threshold";
   return doc;
 }
+
+void
+CandidateCoverage::addFrame (const pcl::PointCloud<InterestPoint> &agex_points,
+                             const std::vector<FusedCandidate> &candidates, const std::vector<PartLabel> &labels)
+{
+  for (const auto &l : labels)
+  {
+    if (!l.visible || !l.tip.allFinite ())
+      continue;
+    const int c = static_cast<int> (l.part);
+    ++labels_[c];
+    const auto near = [&] (const Eigen::Vector3f &p) { return (p - l.tip).norm () <= radius_; };
+    bool agex5 = false, agex_all = false, modes = false, any = false;
+    for (const auto &p : agex_points)
+    {
+      const bool n = near (p.getVector3fMap ());
+      agex_all = agex_all || n;
+      agex5 = agex5 || (n && p.rank >= 2 && p.rank <= 6);
+    }
+    for (const auto &cand : candidates)
+    {
+      const bool n = near (cand.position);
+      any = any || n;
+      modes = modes || (n && (cand.sources & (kFromModeTip | kFromModePosition)));
+    }
+    covered_[0][c] += agex5;
+    covered_[1][c] += agex_all;
+    covered_[2][c] += modes;
+    covered_[3][c] += any || agex_all;
+  }
+}
+
+nlohmann::json
+CandidateCoverage::report () const
+{
+  nlohmann::json doc;
+  const char *kinds[kKinds] = {"agex5", "agex_all", "modes", "union"};
+  for (int c = 0; c < kBodyPartCount; ++c)
+  {
+    const char *name = bodyPartName (static_cast<BodyPart> (c));
+    doc["labels"][name] = labels_[c];
+    for (int k = 0; k < kKinds; ++k)
+      doc[kinds[k]][name] = labels_[c] ? nlohmann::json (static_cast<double> (covered_[k][c]) / labels_[c])
+                                       : nlohmann::json (nullptr);
+  }
+  doc["radius_m"] = radius_;
+  return doc;
+}
 }  // namespace agex
+

@@ -1,6 +1,7 @@
 #include <agex/detection/detector_model.h>
 
 #include <cmath>
+#include <filesystem>
 #include <sstream>
 #include <stdexcept>
 
@@ -30,7 +31,12 @@ checkGeometry (const PatchGeometry &g, const std::string &source)
 const char *
 detectorKindName (DetectorKind kind)
 {
-  return kind == DetectorKind::SlidingWindow ? "sliding_window" : "agex";
+  switch (kind)
+  {
+  case DetectorKind::SlidingWindow: return "sliding_window";
+  case DetectorKind::Fused: return "fused";
+  default: return "agex";
+  }
 }
 
 void
@@ -40,6 +46,15 @@ DetectorSettings::validate (const std::function<std::string (const std::string &
   if (!(suppression_radius >= 0.f && suppression_radius <= 2.f))
     throw std::invalid_argument (name ("suppression_radius") + " is " + formatNumber (suppression_radius) +
                                  ", outside [0, 2] metres");
+  if (kind == DetectorKind::Fused)
+  {
+    fused.validate ([&name] (const std::string &key) { return name ("fused." + key); });
+    if (forest_file.empty () || forest_file.size () > 4096)
+      throw std::invalid_argument (name ("fused.forest") + " must name the forest the model was trained with");
+    if (forest_stride < 1 || forest_stride > 8)
+      throw std::invalid_argument (name ("fused.forest_stride") + " is " + std::to_string (forest_stride) +
+                                   ", outside [1, 8]");
+  }
   if (kind == DetectorKind::SlidingWindow)
   {
     if (sliding_window.stride < 1 || sliding_window.stride > 64)
@@ -62,6 +77,12 @@ DetectorSettings::toJson () const
                         {"pipeline", pipeline.toJson ()}};
   if (kind == DetectorKind::SlidingWindow)
     doc["sliding_window"] = {{"stride", sliding_window.stride}, {"scales", sliding_window.scales}};
+  if (kind == DetectorKind::Fused)
+    doc["fused"] = {{"merge_radius", fused.merge_radius},
+                    {"min_mode_confidence", fused.min_mode_confidence},
+                    {"forest", forest_file},
+                    {"forest_bytes", forest_bytes},
+                    {"forest_stride", forest_stride}};
   return doc;
 }
 
@@ -79,9 +100,11 @@ DetectorSettings::fromJson (const nlohmann::json &doc, const std::string &source
       throw std::invalid_argument (name ("detector") + " must be a string");
     if (*kind == detectorKindName (DetectorKind::SlidingWindow))
       s.kind = DetectorKind::SlidingWindow;
+    else if (*kind == detectorKindName (DetectorKind::Fused))
+      s.kind = DetectorKind::Fused;
     else if (*kind != detectorKindName (DetectorKind::Agex))
       throw std::invalid_argument (name ("detector") + ": unknown detector '" + kind->get<std::string> () +
-                                   "' (expected agex or sliding_window)");
+                                   "' (expected agex, sliding_window or fused)");
   }
   // Models written before the schema moved here kept the radius beside the patch geometry.
   const nlohmann::json *radius = nullptr;
@@ -113,6 +136,28 @@ DetectorSettings::fromJson (const nlohmann::json &doc, const std::string &source
         throw std::invalid_argument (name ("sliding_window.scales") + " must be numbers");
       s.sliding_window.scales.push_back (scale.get<float> ());
     }
+  }
+  if (s.kind == DetectorKind::Fused)
+  {
+    const auto it = doc.find ("fused");
+    if (it == doc.end () || !it->is_object ())
+      throw std::invalid_argument (name ("fused") + " is missing");
+    const auto &f = *it;
+    auto number = [&] (const char *key, double lo, double hi) {
+      if (!f.contains (key) || !f[key].is_number ())
+        throw std::invalid_argument (name (std::string ("fused.") + key) + " is missing or not a number");
+      const double v = f[key].get<double> ();
+      if (!(v >= lo && v <= hi))
+        throw std::invalid_argument (name (std::string ("fused.") + key) + " is out of range");
+      return v;
+    };
+    s.fused.merge_radius = static_cast<float> (number ("merge_radius", -1e6, 1e6));
+    s.fused.min_mode_confidence = static_cast<float> (number ("min_mode_confidence", -1e6, 1e6));
+    s.forest_bytes = static_cast<std::uint64_t> (number ("forest_bytes", 0, 1e12));
+    s.forest_stride = static_cast<int> (number ("forest_stride", -1e6, 1e6));
+    if (!f.contains ("forest") || !f["forest"].is_string ())
+      throw std::invalid_argument (name ("fused.forest") + " is missing or not a file name");
+    s.forest_file = f["forest"].get<std::string> ();
   }
   s.validate (name);
   return s;
@@ -156,6 +201,14 @@ DetectorModel::load (const std::string &path)
   }
   if (metadata.contains ("training") && metadata["training"].is_object ())
     model.training_ = metadata["training"];
+  if (model.settings_.kind == DetectorKind::Fused)
+  {
+    const std::filesystem::path forest (model.settings_.forest_file);
+    model.forest_path_ =
+        (forest.is_absolute () ? forest : std::filesystem::path (path).parent_path () / forest).lexically_normal ().string ();
+    if (classifier->auxiliaryNames () != fusedFeatureNames ())
+      throw ModelError (path + ": a fused model whose classifier does not take this build's forest features");
+  }
   model.classifier_ = classifier;
   return model;
 }

@@ -161,4 +161,32 @@ collectWindowTrainingSamples (const DepthPipelineResult &prepared, const std::ve
   appendRandomNegatives (prepared, labels, 1.5f * radius, random_negatives, false, rng, points, point_classes);
   appendPatches (prepared, points, point_classes, patch, patches, classes);
 }
+
+void
+collectFusedTrainingSamples (const DepthPipelineResult &prepared, const pcl::PointCloud<BodyPartLabelPoint> &labels,
+                             const std::vector<PartMode> &modes, float fx, const Eigen::Vector3f &up,
+                             const FusedCandidateParams &params, const std::vector<PartLabel> &truth, float radius,
+                             const PatchGeometry &geometry, std::vector<agex::DepthPatch> &patches,
+                             std::vector<std::vector<float>> &auxiliary, std::vector<int> &classes)
+{
+  if (!prepared.filtered)
+    return;
+  const std::vector<FusedCandidate> candidates = fusedCandidates (prepared, modes, params);
+  const int width = static_cast<int> (prepared.filtered->width);
+  pcl::PointCloud<agex::InterestPoint> points;
+  for (const auto &c : candidates)
+    points.push_back (candidatePoint (c, width));
+  std::vector<agex::DepthPatch> frame_patches;
+  computePatches (prepared, points, geometry, frame_patches);
+  const FusedFeatures features (prepared, labels, modes, fx, up);
+  std::vector<float> aux (fusedFeatureNames ().size ());
+  for (std::size_t i = 0; i < frame_patches.size () && i < candidates.size (); ++i)
+  {
+    features.compute (candidates[i], aux.data ());
+    const int tip = nearestTip (candidates[i].position, truth, radius);
+    patches.push_back (frame_patches[i]);
+    auxiliary.push_back (aux);
+    classes.push_back (tip < 0 ? -1 : static_cast<int> (truth[tip].part));
+  }
+}
 }  // namespace agex

@@ -887,9 +887,13 @@ TEST (ModelFile, DamagedModelsThrowModelErrorNamingTheFile)
     expectModelError (cut);
   }
 
-  const std::string v2 = dir.file ("v2.yml");
-  agex_test::writeAll (v2, replaceOnce (text, "format_version: 1", "format_version: 2"));
-  expectModelError (v2, "model format version 2 is not supported (this build reads 1)");
+  const std::string v3 = dir.file ("v3.yml");
+  agex_test::writeAll (v3, replaceOnce (text, "format_version: 1", "format_version: 3"));
+  expectModelError (v3, "model format version 3 is not supported (this build reads 2)");
+  // Version 2 holds auxiliary features; a version-1 file that claims them is damaged.
+  const std::string aux_in_v1 = dir.file ("aux_in_v1.yml");
+  agex_test::writeAll (aux_in_v1, replaceOnce (text, "boosters:", "auxiliary_features:\n   - \"|x|\"\nboosters:"));
+  expectModelError (aux_in_v1, "invalid auxiliary_features");
 
   // No dictionary.
   const std::string nodict = dir.file ("nodict.yml");

@@ -1330,7 +1330,12 @@ TEST_F (BodyPartApps, CompareRunsBothDetectorsAndRefusesSwappedModels)
              1);
   EXPECT_NE (readText (out).find (model () + " is an AGEX model"), std::string::npos) << readText (out);
   EXPECT_EQ (run (quoted (AGEX_DETECT_EXECUTABLE) + " " + quoted (AGEX_SOURCE_DIR "/data/frames/bonn_1_002.png") +
-                  " --model " + quoted (sw_model) + " > " + quoted (out) + " 2>&1"),
+                  " --model " + quoted (sw_model) + " --detector-mode agex > " + quoted (out) + " 2>&1"),
              1);
   EXPECT_NE (readText (out).find (sw_model + " is a sliding-window model"), std::string::npos) << readText (out);
+  // Without a mode the model's own kind runs: agex_detect runs the baseline too.
+  EXPECT_EQ (run (quoted (AGEX_DETECT_EXECUTABLE) + " " + quoted (AGEX_SOURCE_DIR "/data/frames/bonn_1_002.png") +
+                  " --model " + quoted (sw_model) + " --json " + quoted (tmp_.file ("sw.json")) + " 2> " + quoted (out)),
+             0) << readText (out);
+  EXPECT_NE (readText (tmp_.file ("sw.json")).find ("\"detector_mode\": \"sliding_window\""), std::string::npos);
 }

@@ -2,6 +2,7 @@
 
 #include <boost/program_options.hpp>
 
+#include <filesystem>
 #include <stdexcept>
 
 namespace po = boost::program_options;
@@ -18,8 +19,9 @@ detectorOptionsDescription (DetectorChoice &choice, const std::string &model_def
   desc.add_options ()
     ("model", po::value (&choice.model)->default_value (model_default),
      "model file: the classifier and the pipeline settings (default: the bundled model)")
-    ("detector-mode", po::value (&choice.mode)->default_value (choice.mode),
-     "agex: the model's classifier on AGEX points; forest: the per-pixel forest's part modes alone")
+    ("detector-mode", po::value (&choice.mode)->default_value (choice.mode, "the model's kind"),
+     "agex: an AGEX model's classifier on AGEX points; fused: a fused model (AGEX points and the forest's part "
+     "modes, one classifier); forest: the per-pixel forest's part modes alone")
     ("forest", po::value (&choice.forest),
      "per-pixel body-part forest: an agex forest file, a PCL tree file (.txt, .txt.bz2) or a directory of them "
      "(e.g. ../shared/data/pcl_people)")
@@ -44,19 +46,34 @@ LoadedDetector
 loadDetector (const DetectorChoice &choice, DetectorKind kind)
 {
   LoadedDetector loaded;
-  if (!parseDetectorMode (choice.mode, loaded.mode))
-    throw std::runtime_error ("unknown --detector-mode '" + choice.mode + "' (expected agex or forest)");
-  if (loaded.mode == DetectorMode::Forest && choice.forest.empty ())
-    throw std::runtime_error ("--detector-mode forest needs --forest (a forest file or a directory of PCL trees)");
+  if (!choice.mode.empty () && choice.mode != "agex" && choice.mode != "fused" && choice.mode != "forest")
+    throw std::runtime_error ("unknown --detector-mode '" + choice.mode + "' (expected agex, fused or forest)");
+  loaded.mode = choice.mode == "forest" ? DetectorMode::Forest : DetectorMode::Model;
   loaded.model = std::make_shared<const DetectorModel> (DetectorModel::load (choice.model));
-  loaded.model->requireKind (kind, choice.model);
+  const DetectorKind model_kind = loaded.model->settings ().kind;
+  if (choice.mode == "agex")
+    loaded.model->requireKind (kind == DetectorKind::Fused ? DetectorKind::Agex : kind, choice.model);
+  if (choice.mode == "fused")
+    loaded.model->requireKind (DetectorKind::Fused, choice.model);
   loaded.files.push_back (choice.model);
-  if (!choice.forest.empty ())
+  std::string forest = choice.forest;
+  if (forest.empty () && model_kind == DetectorKind::Fused)
+    forest = loaded.model->forestPath ();  // a fused model's own forest
+  if (loaded.mode == DetectorMode::Forest && forest.empty ())
+    throw std::runtime_error ("--detector-mode forest needs --forest (a forest file or a directory of PCL trees)");
+  if (!forest.empty ())
   {
-    loaded.forest = BodyPartForest::load (choice.forest);
-    loaded.files.push_back (choice.forest);
+    loaded.forest = BodyPartForest::load (forest);
+    loaded.files.push_back (forest);
+    std::error_code ec;
+    if (model_kind == DetectorKind::Fused && !choice.forest.empty () && choice.mode != "forest" &&
+        (!std::filesystem::is_regular_file (forest, ec) ||
+         std::filesystem::file_size (forest, ec) != loaded.model->settings ().forest_bytes))
+      throw std::runtime_error ("--forest " + forest + " is not the forest " + choice.model +
+                                " was trained with (" + loaded.model->settings ().forest_file + ")");
   }
   loaded.forest_stride = choice.forest_stride;
+  loaded.mode_name = loaded.mode == DetectorMode::Forest ? "forest" : detectorKindName (model_kind);
   return loaded;
 }
 }  // namespace apps

@@ -159,6 +159,7 @@ evaluateDetection (const DatasetSelection &selection, const LoadedDetector &load
   const auto &intr = selection.dataset.info ().intrinsics;
   detector.setFocalLength (static_cast<float> (intr.fx), static_cast<float> (intr.fy));
   agex::DetectionEvaluation evaluation (radius);
+  agex::CandidateCoverage candidates (radius);
   Progress progress ("evaluated", selection.frame_ids.size ());
   std::vector<double> frame_ms;
   for (std::size_t i = 0; i < selection.frame_ids.size (); ++i)
@@ -171,16 +172,19 @@ evaluateDetection (const DatasetSelection &selection, const LoadedDetector &load
     detector.compute (detections);
     frame_ms.push_back (agex::msSince (start));
     evaluation.addFrame (detections, selection.dataset.labelsOf (id));
+    candidates.addFrame (detector.getIntermediate ().interest_points, detector.getCandidates (),
+                         selection.dataset.labelsOf (id));
     progress.step (i + 1);
   }
   constexpr float kConfusionThreshold = 0.75f;
   nlohmann::json doc = evaluation.report (kConfusionThreshold);
   doc["dataset"] = selection.dataset.directory ();
   doc["model"] = loaded.files.front ();
-  doc["detector_mode"] = agex::detectorModeName (loaded.mode);
+  doc["detector_mode"] = loaded.mode_name;
   if (loaded.files.size () > 1)
     doc["forest"] = loaded.files.back ();
   doc["ms_per_frame_median"] = medianMs (frame_ms);
+  doc["candidate_coverage"] = candidates.report ();
   if (!json_path.empty ())
     writeJson (json_path, doc);
   std::cout << selection.dataset.directory () << ": " << selection.frame_ids.size () << " frames\n";

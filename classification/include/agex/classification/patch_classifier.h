@@ -65,7 +65,9 @@ std::size_t yamlNestingBound (const std::string &yaml, std::size_t limit = stati
 class PatchClassifier
 {
 public:
-  static constexpr int kFormatVersion = 1;
+  /** Version 2 adds auxiliary features; files without them are still written as version 1,
+    * and both are read. */
+  static constexpr int kFormatVersion = 2;
   /** The value of the model file's "format" field. */
   static constexpr const char *kFormatName = "agex-model";
 
@@ -81,6 +83,19 @@ public:
   void train (const std::vector<agex::DepthPatch> &patches, const std::vector<int> &labels, int classes,
               const PatchClassifierParams &params, const std::function<void (int, int)> &progress = nullptr);
 
+  /** \brief train () with auxiliary features: auxiliary[i] (auxiliary_names.size () values,
+    * all finite) are appended to patch i's fragment features, so the stumps may split on
+    * facts the patch does not show (e.g. a body-part forest's probabilities around the point).
+    * classify () must then be given the same features in the same order.
+    * \throws std::invalid_argument also if auxiliary does not hold one row per patch of
+    *         auxiliary_names.size () finite values, or there are more than 1024 of them */
+  void train (const std::vector<agex::DepthPatch> &patches, const std::vector<std::vector<float>> &auxiliary,
+              const std::vector<std::string> &auxiliary_names, const std::vector<int> &labels, int classes,
+              const PatchClassifierParams &params, const std::function<void (int, int)> &progress = nullptr);
+
+  /** Names of the auxiliary features, in order (empty for a patch-only classifier). */
+  const std::vector<std::string> &auxiliaryNames () const { return auxiliary_names_; }
+
   bool trained () const { return !trees_.empty (); }
   int classes () const { return static_cast<int> (trees_.size ()); }
 
@@ -91,6 +106,10 @@ public:
     * \throws std::logic_error if not trained, std::invalid_argument if patch.size is not
     *         the trained patch size */
   void classify (const agex::DepthPatch &patch, float *margins, float *confidences) const;
+  /** classify () of a classifier trained with auxiliary features: auxiliary holds
+    * auxiliaryNames ().size () values (may be null when there are none).
+    * \throws std::invalid_argument if auxiliary is null but features are needed */
+  void classify (const agex::DepthPatch &patch, const float *auxiliary, float *margins, float *confidences) const;
 
   /** \brief Writes the model (format name, version, patch geometry, training parameters,
     * metadata, dictionary, boosters) to path atomically (agex::writeFileAtomic).
@@ -161,6 +180,7 @@ private:
   std::vector<cv::Ptr<cv::ml::Boost>> boosters_;
   std::vector<ClassTrees> trees_;
   std::vector<int> used_fragments_;
+  std::vector<std::string> auxiliary_names_;
   PatchGeometry geometry_;
   PatchClassifierParams params_;
   nlohmann::json metadata_;

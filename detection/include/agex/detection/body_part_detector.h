@@ -6,6 +6,7 @@
 #include <agex/detection/body_part_detection.h>
 #include <agex/detection/depth_pipeline.h>
 #include <agex/detection/detector_model.h>
+#include <agex/detection/fused_candidates.h>
 
 #include <pcl/pcl_base.h>
 
@@ -17,10 +18,10 @@ namespace agex
 /** What a detector names parts with. */
 enum class DetectorMode
 {
-  Agex,    ///< the model's classifier on AGEX points (or sliding windows, for such a model)
+  Model,   ///< the model's classifier: on AGEX points, sliding windows or fused candidates (its kind)
   Forest,  ///< the per-pixel body-part forest alone: one detection per part mode
 };
-/** "agex", "forest". */
+/** "model", "forest". */
 const char *detectorModeName (DetectorMode mode);
 /** Inverse of detectorModeName; false for an unknown name. */
 bool parseDetectorMode (const std::string &name, DetectorMode &mode);
@@ -57,7 +58,7 @@ public:
 
   BodyPartDetector () = default;
 
-  /** \brief A detector with the model in path.
+  /** \brief A detector with the model in path (and, for a fused model, its forest).
     * \throws agex::ModelError naming the file and the problem */
   static Ptr fromModel (const std::string &path);
 
@@ -76,7 +77,7 @@ public:
   void setForest (const BodyPartForest::ConstPtr &forest) { forest_ = forest; }
   const BodyPartForest::ConstPtr &getForest () const { return forest_; }
 
-  /** How parts are named (default Agex). Forest needs setForest. */
+  /** How parts are named (default Model). Forest, and a fused model, need setForest. */
   void setMode (DetectorMode mode) { mode_ = mode; }
   DetectorMode getMode () const { return mode_; }
 
@@ -103,6 +104,8 @@ public:
     * ran) and part modes. */
   const pcl::PointCloud<BodyPartLabelPoint> &getPartLabels () const { return part_labels_; }
   const std::vector<PartMode> &getPartModes () const { return part_modes_; }
+  /** A fused model's candidates of the last compute (), in the order they were made. */
+  const std::vector<FusedCandidate> &getCandidates () const { return candidates_; }
 
   /** What the last compute () saw on the way: the filtered cloud, meshes, AGEX points,
     * floor plane, and per-stage milliseconds (the pipeline's stages, then patches and
@@ -122,19 +125,25 @@ private:
   void classify (std::vector<BodyPartDetection> &detections, bool windows);
   /** Labels the meshes' pixels with the forest and finds the part modes ("forest" timing). */
   bool labelParts ();
-  /** One detection per part mode, suppressed and sorted ("classify" timing). */
+  /** One detection per part mode, suppressed and sorted ("modes" timing). */
   void detectFromModes (std::vector<BodyPartDetection> &detections);
+  /** A fused model's candidates named by its classifier ("patches", "classify" timings). */
+  void classifyFused (std::vector<BodyPartDetection> &detections);
+  /** Keeps the most confident detection of a class within the suppression radius, sorted. */
+  void suppress (std::vector<BodyPartDetection> &candidates, std::vector<BodyPartDetection> &detections) const;
 
   DetectorModel::ConstPtr model_;
   DetectorSettings settings_;
   DepthPipelineResult intermediate_;
   std::size_t patches_classified_ = 0;
   BodyPartForest::ConstPtr forest_;
-  DetectorMode mode_ = DetectorMode::Agex;
+  DetectorMode mode_ = DetectorMode::Model;
   float fx_ = 0.f, fy_ = 0.f;
+  float used_fx_ = 0.f;  ///< the focal length the last forest pass used
   int forest_stride_ = 1;
   pcl::PointCloud<BodyPartLabelPoint> part_labels_;
   std::vector<PartMode> part_modes_;
+  std::vector<FusedCandidate> candidates_;
 };
 }  // namespace agex
 

@@ -5,6 +5,7 @@
 
 #include <agex/common/pixel_box.h>
 #include <agex/detection/body_part_detection.h>
+#include <agex/detection/fused_candidates.h>
 #include <agex/io/dataset.h>
 
 #include <nlohmann/json.hpp>
@@ -74,4 +75,25 @@ private:
   std::vector<Pair> pairs_;
   std::array<std::vector<double>, kBodyPartCount> orientation_errors_;
 };
+
+/** \brief How many labelled parts the fused detector's candidates can reach: per class, the
+  * fraction of visible tips within radius (3D) of a candidate of each kind: the first five
+  * AGEX extrema of their mesh (ranks 2-6, the paper's AGEX_5), every AGEX point computed, the
+  * forest's part modes (tips and peaks), and all candidates together. */
+class CandidateCoverage
+{
+public:
+  explicit CandidateCoverage (float radius) : radius_ (radius) {}
+  void addFrame (const pcl::PointCloud<InterestPoint> &agex_points, const std::vector<FusedCandidate> &candidates,
+                 const std::vector<PartLabel> &labels);
+  /** {"agex5": {"head": f, ...}, "agex_all": ..., "modes": ..., "union": ..., "labels": {...}} */
+  nlohmann::json report () const;
+
+private:
+  static constexpr int kKinds = 4;
+  float radius_;
+  std::array<int, kBodyPartCount> labels_{};
+  std::array<std::array<int, kBodyPartCount>, kKinds> covered_{};
+};
 }  // namespace agex
+

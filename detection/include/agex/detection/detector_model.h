@@ -5,6 +5,7 @@
 
 #include <agex/classification/patch_classifier.h>
 #include <agex/detection/depth_pipeline.h>
+#include <agex/detection/fused_candidates.h>
 
 #include <nlohmann/json.hpp>
 
@@ -17,10 +18,11 @@ namespace agex
 /** The detector a model was trained for (its patches are cut differently). */
 enum class DetectorKind
 {
-  Agex,          ///< AGEX points, patches oriented along the point's orientation
-  SlidingWindow  ///< every window position, upright patches (agex::SlidingWindowDetector)
+  Agex,           ///< AGEX points, patches oriented along the point's orientation
+  SlidingWindow,  ///< every window position, upright patches (agex::SlidingWindowDetector)
+  Fused           ///< AGEX points and a forest's part modes, patches and forest features (agex::FusedFeatures)
 };
-/** "agex" or "sliding_window", as model files name them. */
+/** "agex", "sliding_window" or "fused", as model files name them. */
 const char *detectorKindName (DetectorKind kind);
 
 /** Window layout of a sliding-window model (agex::SlidingWindowDetector). */
@@ -38,6 +40,12 @@ struct DetectorSettings
   float suppression_radius = 0.15f;
   DetectorKind kind = DetectorKind::Agex;  ///< models without the field are AGEX models
   SlidingWindowParams sliding_window;      ///< used by sliding-window models only
+  /** Fused models: the candidates, and the forest the classifier's forest features came
+    * from (a path relative to the model file's directory, and its size in bytes, checked). */
+  FusedCandidateParams fused;
+  std::string forest_file;
+  std::uint64_t forest_bytes = 0;
+  int forest_stride = 1;  ///< pixel stride of the forest pass, 1-8
 
   /** \throws std::invalid_argument naming the setting (name (key)) out of range */
   void validate (const std::function<std::string (const std::string &key)> &name) const;
@@ -76,6 +84,9 @@ public:
   const std::shared_ptr<const PatchClassifier> &classifierPtr () const { return classifier_; }
   const DetectorSettings &settings () const { return settings_; }
   const PatchGeometry &patchGeometry () const { return classifier_->patchGeometry (); }
+  /** A fused model's forest as a path (its settings' forest_file resolved against the model
+    * file's directory); empty for other models or a model not loaded from a file. */
+  const std::string &forestPath () const { return forest_path_; }
   /** The metadata's "training" object of a loaded model (empty for a new one). */
   const nlohmann::json &training () const { return training_; }
 
@@ -83,5 +94,6 @@ private:
   std::shared_ptr<const PatchClassifier> classifier_;
   DetectorSettings settings_;
   nlohmann::json training_ = nlohmann::json::object ();
+  std::string forest_path_;
 };
 }  // namespace agex

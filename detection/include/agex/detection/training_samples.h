@@ -4,6 +4,7 @@
 
 #include <agex/classification/patch_classifier.h>
 #include <agex/detection/depth_pipeline.h>
+#include <agex/detection/fused_candidates.h>
 #include <agex/io/dataset.h>
 
 #include <random>
@@ -34,4 +35,15 @@ void collectWindowTrainingSamples (const DepthPipelineResult &prepared, const st
                                    float radius, int jitter, float jitter_radius, int random_negatives,
                                    const PatchGeometry &geometry, std::mt19937_64 &rng,
                                    std::vector<agex::DepthPatch> &patches, std::vector<int> &classes);
+
+/** \brief Fused training examples from one labelled frame, appended: every fused candidate
+  * (agex::fusedCandidates of the frame's AGEX points and part modes; positive for class c when
+  * within radius of a visible tip of class c, the nearest such tip's class, else background)
+  * with its patch (oriented along the candidate) and its auxiliary features
+  * (agex::FusedFeatures over the forest's labels). */
+void collectFusedTrainingSamples (const DepthPipelineResult &prepared, const pcl::PointCloud<BodyPartLabelPoint> &labels,
+                                  const std::vector<PartMode> &modes, float fx, const Eigen::Vector3f &up,
+                                  const FusedCandidateParams &params, const std::vector<PartLabel> &truth, float radius,
+                                  const PatchGeometry &geometry, std::vector<agex::DepthPatch> &patches,
+                                  std::vector<std::vector<float>> &auxiliary, std::vector<int> &classes);
 }  // namespace agex

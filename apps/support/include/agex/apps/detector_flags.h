@@ -19,7 +19,7 @@ struct DetectorChoice
 {
   std::string model;   ///< model file (default: the bundled model)
   std::string forest;  ///< forest: our model file, a PCL tree file or a directory of them
-  std::string mode = "agex";
+  std::string mode;  ///< agex, fused or forest; empty: the model's own kind
   int forest_stride = 1;
 };
 
@@ -32,8 +32,10 @@ struct LoadedDetector
 {
   DetectorModel::ConstPtr model;
   BodyPartForest::ConstPtr forest;
-  DetectorMode mode = DetectorMode::Agex;
+  DetectorMode mode = DetectorMode::Model;
   int forest_stride = 1;
+  /** What names the parts: "agex", "fused", "sliding_window" (the model's kind) or "forest". */
+  std::string mode_name;
 
   /** Gives detector the model, forest, mode and stride. */
   void configure (BodyPartDetector<pcl::PointXYZ> &detector) const;

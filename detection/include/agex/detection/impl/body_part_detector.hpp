@@ -5,6 +5,7 @@
 #include <agex/classification/sliding_window_detector.h>
 #include <agex/common/statistics.h>
 #include <agex/detection/body_part_detector.h>
+#include <agex/detection/fused_candidates.h>
 #include <agex/detection/training_samples.h>
 #include <agex/features/depth_patch_estimation.h>
 
@@ -15,7 +16,10 @@ template <typename PointT> typename agex::BodyPartDetector<PointT>::Ptr
 agex::BodyPartDetector<PointT>::fromModel (const std::string &path)
 {
   Ptr detector (new BodyPartDetector<PointT>);
-  detector->setModel (std::make_shared<const DetectorModel> (DetectorModel::load (path)));
+  const auto model = std::make_shared<const DetectorModel> (DetectorModel::load (path));
+  detector->setModel (model);
+  if (!model->forestPath ().empty ())
+    detector->setForest (BodyPartForest::load (model->forestPath ()));
   return detector;
 }
 
@@ -44,14 +48,16 @@ agex::BodyPartDetector<PointT>::compute (std::vector<BodyPartDetection> &detecti
   patches_classified_ = 0;
   part_labels_.clear ();
   part_modes_.clear ();
+  candidates_.clear ();
   if (!model_ || !model_->valid ())
   {
     PCL_ERROR ("[agex::BodyPartDetector::compute] No model was given (setModel or fromModel).\n");
     return;
   }
-  if (mode_ == DetectorMode::Forest && !forest_)
+  const bool fused = mode_ == DetectorMode::Model && settings_.kind == DetectorKind::Fused;
+  if ((mode_ == DetectorMode::Forest || fused) && !forest_)
   {
-    PCL_ERROR ("[agex::BodyPartDetector::compute] The forest mode needs a forest (setForest).\n");
+    PCL_ERROR ("[agex::BodyPartDetector::compute] The forest mode and fused models need a forest (setForest).\n");
     return;
   }
   DepthPipeline<PointT> pipeline (settings_.pipeline);
@@ -71,6 +77,8 @@ agex::BodyPartDetector<PointT>::compute (std::vector<BodyPartDetection> &detecti
     if (labelled)
       detectFromModes (detections);
   }
+  else if (fused)
+    classifyFused (detections);
   else
     classify (detections, settings_.kind == DetectorKind::SlidingWindow);
   for (std::size_t i = first_later_stage; i < intermediate_.ms.size (); ++i)
@@ -83,33 +91,12 @@ agex::BodyPartDetector<PointT>::labelParts ()
 {
   const auto start = std::chrono::steady_clock::now ();
   const DepthPipelineResult &prepared = intermediate_;
-  bool ok = false;
-  if (prepared.filtered && !prepared.meshes.empty ())
-  {
-    float fx = fx_, fy = fy_;
-    if (!(fx > 0.f) || !(fy > 0.f))
-      fx = fy = DepthPatchEstimation<pcl::PointXYZ, DepthPatch>::estimateFocalLength (*prepared.filtered);
-    if (fx > 0.f && fy > 0.f)
-    {
-      const std::vector<int> body = prepared.meshIndices ();
-      BodyPartLabeling<pcl::PointXYZ> labeling;
-      labeling.setInputCloud (prepared.filtered);
-      labeling.setIndices (std::make_shared<pcl::Indices> (body.begin (), body.end ()));
-      labeling.setForest (forest_);
-      labeling.setFocalLength (fx, fy);
-      labeling.setStride (forest_stride_);
-      ok = labeling.compute (part_labels_);
-      if (ok)
-      {
-        PartModeEstimation modes;
-        PartModeParams params;
-        params.fx = fx;
-        params.fy = fy;
-        modes.setParams (params);
-        ok = modes.compute (part_labels_, part_modes_);
-      }
-    }
-  }
+  float fx = fx_, fy = fy_;
+  if ((!(fx > 0.f) || !(fy > 0.f)) && prepared.filtered)
+    fx = fy = DepthPatchEstimation<pcl::PointXYZ, DepthPatch>::estimateFocalLength (*prepared.filtered);
+  used_fx_ = fx;
+  const int stride = settings_.kind == DetectorKind::Fused ? settings_.forest_stride : forest_stride_;
+  const bool ok = labelPersonParts (prepared, forest_, fx, fy, stride, part_labels_, part_modes_);
   intermediate_.ms.emplace_back ("forest", msSince (start));
   return ok;
 }
@@ -134,6 +121,15 @@ agex::BodyPartDetector<PointT>::detectFromModes (std::vector<BodyPartDetection> 
     d.v = m.tip_index / width;
     candidates.push_back (d);
   }
+  patches_classified_ = candidates.size ();
+  suppress (candidates, detections);
+  intermediate_.ms.emplace_back ("modes", msSince (start));
+}
+
+template <typename PointT> void
+agex::BodyPartDetector<PointT>::suppress (std::vector<BodyPartDetection> &candidates,
+                                          std::vector<BodyPartDetection> &detections) const
+{
   std::vector<Eigen::Vector3f> positions;
   std::vector<int> parts;
   std::vector<float> scores;
@@ -145,8 +141,51 @@ agex::BodyPartDetector<PointT>::detectFromModes (std::vector<BodyPartDetection> 
   }
   for (const std::size_t i : agex::suppressNonMaxima (positions, parts, scores, settings_.suppression_radius))
     detections.push_back (candidates[i]);
-  patches_classified_ = candidates.size ();
-  intermediate_.ms.emplace_back ("modes", msSince (start));
+}
+
+template <typename PointT> void
+agex::BodyPartDetector<PointT>::classifyFused (std::vector<BodyPartDetection> &detections)
+{
+  using Clock = std::chrono::steady_clock;
+  auto start = Clock::now ();
+  const DepthPipelineResult &prepared = intermediate_;
+  candidates_ = fusedCandidates (prepared, part_modes_, settings_.fused);
+  const std::vector<FusedCandidate> &candidates = candidates_;
+  const int width = prepared.filtered ? static_cast<int> (prepared.filtered->width) : 0;
+  pcl::PointCloud<agex::InterestPoint> points;
+  for (const auto &c : candidates)
+    points.push_back (candidatePoint (c, width));
+  std::vector<agex::DepthPatch> patches;
+  computePatches (prepared, points, model_->patchGeometry (), patches);
+  intermediate_.ms.emplace_back ("patches", msSince (start));
+  start = Clock::now ();
+  const PatchClassifier &classifier = model_->classifier ();
+  const FusedFeatures features (prepared, part_labels_, part_modes_, used_fx_, settings_.pipeline.up);
+  std::vector<float> aux (fusedFeatureNames ().size ());
+  const int classes = classifier.classes ();
+  std::vector<float> margins (classes), confidences (classes);
+  std::vector<BodyPartDetection> named;
+  for (std::size_t i = 0; i < patches.size () && i < candidates.size (); ++i)
+  {
+    features.compute (candidates[i], aux.data ());
+    classifier.classify (patches[i], aux.data (), margins.data (), confidences.data ());
+    const int best = static_cast<int> (std::max_element (confidences.begin (), confidences.end ()) - confidences.begin ());
+    const FusedCandidate &c = candidates[i];
+    BodyPartDetection d;
+    d.part = static_cast<BodyPart> (best);
+    d.confidence = confidences[best];
+    d.margin = margins[best];
+    d.position = c.position;
+    d.orientation = c.orientation;
+    d.u = width > 0 ? c.index % width : 0;
+    d.v = width > 0 ? c.index / width : 0;
+    d.rank = c.agex_rank;
+    d.mesh = c.mesh;
+    named.push_back (d);
+  }
+  patches_classified_ = named.size ();
+  suppress (named, detections);
+  intermediate_.ms.emplace_back ("classify", msSince (start));
 }
 
 template <typename PointT> void
@@ -220,17 +259,7 @@ agex::BodyPartDetector<PointT>::classify (std::vector<BodyPartDetection> &detect
   patches_classified_ = candidates.size ();
   // Several extrema often sit on one part (a hand's fingers, the two sides of a head):
   // keep the most confident detection of a class within the suppression radius.
-  std::vector<Eigen::Vector3f> positions;
-  std::vector<int> parts;
-  std::vector<float> scores;
-  for (const auto &d : candidates)
-  {
-    positions.push_back (d.position);
-    parts.push_back (static_cast<int> (d.part));
-    scores.push_back (d.confidence);
-  }
-  for (const std::size_t i : agex::suppressNonMaxima (positions, parts, scores, settings_.suppression_radius))
-    detections.push_back (candidates[i]);
+  suppress (candidates, detections);
   intermediate_.ms.emplace_back ("classify", msSince (start));
 }
 

@@ -1,0 +1,84 @@
+#include <agex/apps/training_runs.h>
+
+#include <agex/apps/command_line.h>
+#include <agex/apps/dataset_selection.h>
+#include <agex/detection/training_samples.h>
+
+#include <array>
+#include <iostream>
+#include <random>
+
+namespace agex
+{
+namespace apps
+{
+nlohmann::json
+collectTrainingExamples (const std::vector<std::string> &datasets, const TrainingChoice &choice,
+                         const DetectorSettings &settings, const PatchGeometry &geometry,
+                         std::vector<DepthPatch> &patches, std::vector<std::vector<float>> &auxiliary,
+                         std::vector<int> &classes)
+{
+  std::mt19937_64 rng (choice.seed);
+  nlohmann::json sources = nlohmann::json::array ();
+  for (const auto &spec : datasets)
+  {
+    const DatasetSelection selection = selectDataset (spec, choice.keyframes);
+    const auto &intr = selection.dataset.info ().intrinsics;
+    const float fx = static_cast<float> (intr.fx), fy = static_cast<float> (intr.fy);
+    Progress progress ("frames of " + spec, selection.frame_ids.size ());
+    std::size_t used = 0;
+    for (std::size_t i = 0; i < selection.frame_ids.size (); ++i)
+    {
+      const auto &id = selection.frame_ids[i];
+      const auto labels = selection.dataset.labelsOf (id);
+      progress.step (i + 1);
+      if (labels.empty ())
+        continue;  // unlabelled frames say nothing about where parts are
+      const auto prepared = runDepthPipeline (selection.dataset.loadFrame (id), settings.pipeline);
+      switch (choice.kind)
+      {
+      case DetectorKind::SlidingWindow:
+        collectWindowTrainingSamples (prepared, labels, choice.radius, choice.jitter, choice.jitter_radius,
+                                      choice.window_negatives, geometry, rng, patches, classes);
+        break;
+      case DetectorKind::Fused:
+      {
+        pcl::PointCloud<BodyPartLabelPoint> part_labels;
+        std::vector<PartMode> modes;
+        labelPersonParts (prepared, choice.forest, fx, fy, settings.forest_stride, part_labels, modes);
+        collectFusedTrainingSamples (prepared, part_labels, modes, fx, settings.pipeline.up, settings.fused, labels,
+                                     choice.radius, geometry, patches, auxiliary, classes);
+        break;
+      }
+      default:
+        collectTrainingSamples (prepared, labels, choice.radius, choice.random_negatives, geometry, rng, patches,
+                                classes);
+      }
+      ++used;
+    }
+    sources.push_back ({{"dataset", spec}, {"frames", used}});
+  }
+  return sources;
+}
+
+DetectorModel
+trainDetector (const std::vector<DepthPatch> &patches, const std::vector<std::vector<float>> &auxiliary,
+               const std::vector<int> &classes, const PatchClassifierParams &params, const PatchGeometry &geometry,
+               const DetectorSettings &settings)
+{
+  std::array<int, 4> counts{};
+  for (const int c : classes)
+    ++counts[c < 0 ? 3 : c];
+  std::cout << "training on " << patches.size () << " patches: head " << counts[0] << ", hand " << counts[1]
+            << ", foot " << counts[2] << ", background " << counts[3] << "\n";
+  auto classifier = std::make_shared<PatchClassifier> ();
+  const auto progress = [] (int done, int total) { std::cerr << "  boosted class " << done << "/" << total << "\n"; };
+  if (settings.kind == DetectorKind::Fused)
+    classifier->train (patches, auxiliary, fusedFeatureNames (), classes, kBodyPartCount, params, progress);
+  else
+    classifier->train (patches, classes, kBodyPartCount, params, progress);
+  classifier->setPatchGeometry (geometry);
+  return DetectorModel (classifier, settings);
+}
+}  // namespace apps
+}  // namespace agex

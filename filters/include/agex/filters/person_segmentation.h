@@ -70,17 +70,20 @@ struct PersonInfo
   *    area at least the minimum; the upright parts at most the maximum width; at least the
   *    minimum background fraction of the outline (away from the image border) bordering
   *    on background (no data, the floor, or surfaces farther away: a fragment hemmed in by
-  *    nearer things is no one of its own); a narrow top (setCrownLimits), unless the top
-  *    is cut off by the image or hidden behind something nearer. Walls and shelves are too
-  *    wide or too tall, desks too low, chairs and cabinets flat on top. Sitting people
+  *    nearer things is no one of its own); a top narrower than the body (setCrownLimits),
+  *    unless the top is cut off by the image or hidden behind something nearer. Walls and
+  *    shelves are too wide or too tall, desks too low, chairs and cabinets as wide on top
+  *    as below. Sitting people
   *    (top 1.2-1.4 m), children from 0.9 m, people behind a desk (seen from the desk top
   *    up) and people cut off by the image's borders are kept.
   * 5. **Split.** A cluster's height profile across the view (the highest point per bin) is
   *    searched for heads, as pcl::people::HeadBasedSubclustering does: peaks at least the
   *    minimum head distance apart with a valley at least the minimum valley depth below
-  *    the lower one. The cut goes where the fewest cells are between the peaks, and only
-  *    if the cluster narrows there (to at most 0.7 of the fuller column on either side: a
-  *    cut between two bodies crosses only what joins them, a cut between a raised hand
+  *    the lower one, each standing on a body (the column under it at least half as tall
+  *    as the tallest column: a raised fist's is only the forearm). The cut goes where the
+  *    cluster is least tall between the peaks (cells per image column), and only if it
+  *    narrows there to at most the maximum narrowing of the taller column on either side
+  *    (a cut between two bodies crosses only what joins them, a cut between a raised hand
   *    and the head crosses the torso) and both sides are person-like on their own.
   * 6. **Merge.** Two person-like pieces of different clusters whose ground positions are
   *    within the merge distance join when together they are person-like (a person cut in
@@ -213,23 +216,23 @@ public:
   /** Least visible area, square metres (default 0.12: a head and shoulders). */
   void setMinArea (float square_metres) { min_area_ = square_metres; }
   float getMinArea () const { return min_area_; }
-  /** The narrow-top rule: the cells within drop metres (plus twice the depth noise) of the
-    * top span at most width_per_height times the top's height above the floor (without a
-    * floor: times 1.75 m) across the view without a gap (defaults 0.05 m and 0.3: 0.53 m
-    * for a 1.75 m adult, 0.3 m for a 1 m child or chair). A rounded head, with hands on
-    * it, or raised hands, each on their own, pass; a chair's back, a monitor or a cabinet
-    * is flat on top. Hands on the head widen the crown as far as the arms reach, which
-    * grows with the body's height. */
-  void setCrownLimits (float drop, float width_per_height)
+  /** The narrow-top rule: the crown, the cells within drop metres (plus twice the depth
+    * noise) of the top, spans across the view without a gap at most ratio times the width
+    * of the upright parts across the view (defaults 0.05 m and 0.75). A head is narrower
+    * than the shoulders and hips below it (with hands on it too, 0.45 m against 0.7 m;
+    * raised hands count each on their own; seen from the side, the head's 0.2 m against the
+    * body's 0.3 m); a chair's back, a cabinet, a table, a lamp are as wide on top as below
+    * or wider, also when cut off by the image's side or seen from the side. */
+  void setCrownLimits (float drop, float ratio)
   {
     crown_drop_ = drop;
-    max_crown_width_ = width_per_height;
+    max_crown_ratio_ = ratio;
   }
   float getCrownDrop () const { return crown_drop_; }
-  float getMaxCrownWidthPerHeight () const { return max_crown_width_; }
+  float getMaxCrownRatio () const { return max_crown_ratio_; }
   /** Splitting: heads at least distance apart, with a valley at least depth below the lower,
-    * and a cut column with at most narrowing times the cells of the fuller column on each
-    * side (defaults 0.3 m, as pcl::people::HeadBasedSubclustering, 0.15 m and 0.7). */
+    * and a cut column at most narrowing times as tall as the taller column on each side
+    * (defaults 0.3 m, as pcl::people::HeadBasedSubclustering, 0.15 m and 0.7). */
   void setSplitLimits (float head_distance, float valley_depth, float narrowing = 0.7f)
   {
     min_head_distance_ = head_distance;
@@ -301,7 +304,7 @@ private:
   float max_bottom_ = 1.1f;
   float max_width_ = 1.2f;
   float min_area_ = 0.12f;
-  float crown_drop_ = 0.05f, max_crown_width_ = 0.3f;
+  float crown_drop_ = 0.05f, max_crown_ratio_ = 0.75f;
   float min_head_distance_ = 0.3f, min_valley_depth_ = 0.15f, max_narrowing_ = 0.7f;
   float merge_reach_ = 0.6f, merge_distance_ = 0.3f;
   float fallback_min_extent_ = 0.3f, min_background_fraction_ = 0.5f;

@@ -56,14 +56,17 @@ struct PersonPartStats
   float az_min = std::numeric_limits<float>::infinity (), az_max = -std::numeric_limits<float>::infinity ();
   double lat_sum = 0.0, fwd_sum = 0.0, z_sum = 0.0;
   unsigned border = 0;
-  float width = 0.f;       ///< extent of the upright bins along the wider horizontal axis
+  float width = 0.f;         ///< extent of the upright bins along the wider horizontal axis
+  float width_across = 0.f;  ///< the same across the view
   float head_width = 0.f;  ///< widest run of lateral bins holding crown cells
   int outline = 0, outline_background = 0;
+  bool outlined = false;  ///< outline counted
   int base = 0, base_supported = 0;  ///< lowest cells, and those standing on something
   int crown = 0, crown_hidden = 0;    ///< top cells, and those with something nearer above
   float bin = 0.05f;
   std::vector<float> profile;  ///< highest point per lateral bin from lat_min (-inf: empty)
   std::vector<int> column;     ///< cells per lateral bin
+  std::vector<float> fill;     ///< cells per image column in each lateral bin
 
   float latMean () const { return cells ? static_cast<float> (lat_sum / cells) : 0.f; }
   float fwdMean () const { return cells ? static_cast<float> (fwd_sum / cells) : 0.f; }
@@ -136,7 +139,7 @@ agex::PersonSegmentation<PointT>::validParameters () const
          positive (floor_distance_) && non_negative (min_floor_spread_) && non_negative (fx_) &&
          non_negative (fy_) && coarse_step_ >= 0 && coarse_step_ <= 64 && non_negative (depth_noise_) && non_negative (max_slope_) && positive (min_gap_) &&
          non_negative (min_top_) && positive (max_top_) && min_top_ < max_top_ && non_negative (max_bottom_) &&
-         positive (max_width_) && non_negative (min_area_) && positive (crown_drop_) && positive (max_crown_width_) &&
+         positive (max_width_) && non_negative (min_area_) && positive (crown_drop_) && positive (max_crown_ratio_) &&
          positive (min_head_distance_) && positive (min_valley_depth_) && max_narrowing_ > 0.f &&
          max_narrowing_ <= 1.f && non_negative (merge_reach_) &&
          non_negative (merge_distance_) && non_negative (fallback_min_extent_) && min_background_fraction_ >= 0.f &&
@@ -210,9 +213,9 @@ agex::PersonSegmentation<PointT>::segment (pcl::PointCloud<pcl::Label> &labels, 
   labels.height = cloud.height;
   labels.is_dense = cloud.is_dense;
   labels.header = cloud.header;
-  labels.points.assign (n, pcl::Label ());
-  for (auto &l : labels.points)
-    l.label = kUnlabelled;
+  pcl::Label nobody;
+  nobody.label = kUnlabelled;
+  labels.points.assign (n, nobody);
 
   std::vector<unsigned char> selected;
   if (!fake_indices_)
@@ -258,7 +261,9 @@ agex::PersonSegmentation<PointT>::segment (pcl::PointCloud<pcl::Label> &labels, 
   used_fx_ = fx;
   used_fy_ = fy;
 
-  // 1. The coarse grid: the block's centre pixel, or its first usable pixel.
+  // 1. The coarse grid: the block's centre pixel, or else the first usable centre of its
+  // quarters (a block without either is empty: its pixels may still join a neighbour's
+  // person at full resolution).
   const int step = coarse_step_ > 0 ? coarse_step_
                                     : std::max (1, static_cast<int> (std::lround (kAutoCellAngle * std::min (fx, fy))));
   used_step_ = step;
@@ -270,17 +275,17 @@ agex::PersonSegmentation<PointT>::segment (pcl::PointCloud<pcl::Label> &labels, 
     {
       const int u0 = cu * step, v0 = cv * step;
       const int u1 = std::min (width, u0 + step), v1 = std::min (height, v0 + step);
-      int pixel = (v0 + (v1 - v0) / 2) * width + u0 + (u1 - u0) / 2;
+      const int bu = u1 - u0, bv = v1 - v0;
+      int pixel = (v0 + bv / 2) * width + u0 + bu / 2;
       if (!usable (pixel))
       {
         pixel = -1;
-        for (int v = v0; v < v1 && pixel < 0; ++v)
-          for (int u = u0; u < u1; ++u)
-            if (usable (v * width + u))
-            {
-              pixel = v * width + u;
-              break;
-            }
+        for (int q = 0; q < 4 && pixel < 0; ++q)
+        {
+          const int candidate = (v0 + (q / 2 * 2 + 1) * bv / 4) * width + u0 + (q % 2 * 2 + 1) * bu / 4;
+          if (usable (candidate))
+            pixel = candidate;
+        }
       }
       grid[cv * cw + cu].pixel = pixel;
       if (pixel >= 0)
@@ -449,20 +454,6 @@ agex::PersonSegmentation<PointT>::segment (pcl::PointCloud<pcl::Label> &labels, 
         const int cu = c % cw, cv = c / cw;
         s.border |= (cu == 0 ? PersonInfo::kLeft : 0u) | (cu == cw - 1 ? PersonInfo::kRight : 0u) |
                     (cv == 0 ? PersonInfo::kTop : 0u) | (cv == ch - 1 ? PersonInfo::kBottom : 0u);
-        for (const auto &d : kAllNeighbours)
-        {
-          const int nu = cu + d[0], nv = cv + d[1];
-          if (nu < 0 || nu >= cw || nv < 0 || nv >= ch)
-            continue;
-          const int j = nv * cw + nu;
-          if (cluster_of[j] == part.cluster || inParts (parts, j))
-            continue;  // inside, or the other side of a cut: not an outline
-          ++s.outline;
-          // Background: no data, the floor, or a surface farther away.
-          const PersonGridCell &o = grid[j];
-          if (!o.valid || (o.z > g.z && !connected (g, o, d[0] != 0 && d[1] != 0)))
-            ++s.outline_background;
-        }
       }
     if (!s.cells)
       return;
@@ -477,6 +468,7 @@ agex::PersonSegmentation<PointT>::segment (pcl::PointCloud<pcl::Label> &labels, 
     std::vector<float> lat_lo (nlat, kInf), lat_hi (nlat, -kInf), fwd_lo (nfwd, kInf), fwd_hi (nfwd, -kInf);
     std::vector<unsigned char> head (nlat, 0);
     s.column.assign (nlat, 0);
+    std::vector<int> column_first (nlat, cw), column_last (nlat, -1);
     const float base_band = 0.1f;
     const float crown_drop = crown_drop_ + 2.f * noise * s.zMean () * s.zMean ();
     for (const auto &part : parts)
@@ -488,6 +480,9 @@ agex::PersonSegmentation<PointT>::segment (pcl::PointCloud<pcl::Label> &labels, 
         const int bl = std::min (nlat - 1, static_cast<int> ((g.lat - s.lat_min) / s.bin));
         const int bf = std::min (nfwd - 1, static_cast<int> ((g.fwd - s.fwd_min) / s.bin));
         ++s.column[bl];
+        const int cu = cluster_cells[k] % cw;
+        column_first[bl] = std::min (column_first[bl], cu);
+        column_last[bl] = std::max (column_last[bl], cu);
         lat_lo[bl] = std::min (lat_lo[bl], g.h);
         lat_hi[bl] = std::max (lat_hi[bl], g.h);
         fwd_lo[bf] = std::min (fwd_lo[bf], g.h);
@@ -533,9 +528,8 @@ agex::PersonSegmentation<PointT>::segment (pcl::PointCloud<pcl::Label> &labels, 
       }
     const float upright = 0.3f;
     const bool clipped = s.lat_max - s.lat_min > max_extent || s.fwd_max - s.fwd_min > max_extent;
-    s.width = clipped ? kInf
-                      : std::max (detail::uprightExtent (lat_lo, lat_hi, s.bin, upright),
-                                  detail::uprightExtent (fwd_lo, fwd_hi, s.bin, upright));
+    s.width_across = clipped ? kInf : detail::uprightExtent (lat_lo, lat_hi, s.bin, upright);
+    s.width = clipped ? kInf : std::max (s.width_across, detail::uprightExtent (fwd_lo, fwd_hi, s.bin, upright));
     int run = 0, longest = 0;
     for (const auto occupied : head)
     {
@@ -544,9 +538,44 @@ agex::PersonSegmentation<PointT>::segment (pcl::PointCloud<pcl::Label> &labels, 
     }
     s.head_width = static_cast<float> (longest) * s.bin;
     s.profile.swap (lat_hi);
+    // Cells per image column of each bin: how tall the cluster is there, whatever number of
+    // cell columns a bin happens to hold.
+    s.fill.assign (nlat, 0.f);
+    for (int b = 0; b < nlat; ++b)
+      if (s.column[b] > 0)
+        s.fill[b] = static_cast<float> (s.column[b]) / static_cast<float> (column_last[b] - column_first[b] + 1);
   };
 
-  auto verdict = [&] (const PersonPartStats &s) {
+  // The outline: neighbours outside the parts, and how many of them are background (no
+  // data, the floor, or a surface farther away). Only asked for when the cheaper rules pass.
+  auto outline = [&] (const std::vector<PersonPart> &parts, PersonPartStats &s) {
+    s.outline = s.outline_background = 0;
+    for (const auto &part : parts)
+      for (int k = cluster_start[part.cluster]; k < cluster_start[part.cluster + 1]; ++k)
+      {
+        const int c = cluster_cells[k];
+        const PersonGridCell &g = grid[c];
+        if (g.lat < part.lo || g.lat >= part.hi)
+          continue;
+        const int cu = c % cw, cv = c / cw;
+        for (const auto &d : kAllNeighbours)
+        {
+          const int nu = cu + d[0], nv = cv + d[1];
+          if (nu < 0 || nu >= cw || nv < 0 || nv >= ch)
+            continue;
+          const int j = nv * cw + nu;
+          if (cluster_of[j] == part.cluster || inParts (parts, j))
+            continue;  // inside, or the other side of a cut: not an outline
+          ++s.outline;
+          const PersonGridCell &o = grid[j];
+          if (!o.valid || (o.z > g.z && !connected (g, o, d[0] != 0 && d[1] != 0)))
+            ++s.outline_background;
+        }
+      }
+    s.outlined = true;
+  };
+
+  auto verdict = [&] (const std::vector<PersonPart> &parts, PersonPartStats &s) {
     if (!s.cells)
       return PersonVerdict::kEmpty;
     if (s.area < min_area_)
@@ -571,14 +600,15 @@ agex::PersonSegmentation<PointT>::segment (pcl::PointCloud<pcl::Label> &labels, 
       if (s.top - s.bottom > max_top_)
         return PersonVerdict::kTooTall;
     }
+    // The top narrower than the body below it; a top cut off by the image or hidden
+    // behind something nearer says nothing.
+    if (s.head_width > max_crown_ratio_ * s.width_across && !(s.border & PersonInfo::kTop) &&
+        2 * s.crown_hidden < s.crown)
+      return PersonVerdict::kWideTop;
+    if (!s.outlined)
+      outline (parts, s);
     if (s.outline_background < min_background_fraction_ * s.outline)
       return PersonVerdict::kBehind;
-    // A top cut off by the image or hidden behind something nearer is not a head.
-    // Hands on the head widen the crown as far as the arms reach, which grows with the
-    // body's height (without a floor: an adult's, 1.75 m).
-    const float max_crown = max_crown_width_ * (with_floor ? s.top : 1.75f);
-    if (s.head_width > max_crown && !(s.border & PersonInfo::kTop) && 2 * s.crown_hidden < s.crown)
-      return PersonVerdict::kWideTop;
     return PersonVerdict::kPerson;
   };
 
@@ -615,7 +645,7 @@ agex::PersonSegmentation<PointT>::segment (pcl::PointCloud<pcl::Label> &labels, 
       candidate.parts.assign (1, part);
       measure (candidate.parts, candidate.stats);
       const PersonPartStats &s = candidate.stats;
-      candidate.verdict = verdict (s);
+      candidate.verdict = verdict (candidate.parts, candidate.stats);
       candidate.split = was_split;
 
       // Head peaks: highest within half the head distance on either side.
@@ -655,16 +685,20 @@ agex::PersonSegmentation<PointT>::segment (pcl::PointCloud<pcl::Label> &labels, 
           {
             if (profile[o] > -kInf)
               floor_of_valley = std::min (floor_of_valley, profile[o]);
-            if (neck < 0 || s.column[o] < s.column[neck])
+            if (neck < 0 || s.fill[o] < s.fill[neck])
               neck = o;
           }
           if (!(floor_of_valley < kInf))
             floor_of_valley = -kInf;
           const float depth = std::min (profile[a], profile[b]) - floor_of_valley;
-          const int left_max = *std::max_element (s.column.begin (), s.column.begin () + neck);
-          const int right_max = *std::max_element (s.column.begin () + neck + 1, s.column.end ());
-          const float narrowing = static_cast<float> (s.column[neck]) / std::max (1, std::min (left_max, right_max));
-          if (depth >= min_valley_depth_ && narrowing <= max_narrowing_)
+          const float left_max = *std::max_element (s.fill.begin (), s.fill.begin () + neck);
+          const float right_max = *std::max_element (s.fill.begin () + neck + 1, s.fill.end ());
+          const float narrowing = s.fill[neck] / std::max (1.f, std::min (left_max, right_max));
+          // Each head stands on a body: the column under it is at least half as tall as the
+          // tallest (a raised fist's is only the forearm).
+          const float fullest = std::max (left_max, right_max);
+          const bool bodies = s.fill[a] >= 0.5f * fullest && s.fill[b] >= 0.5f * fullest;
+          if (depth >= min_valley_depth_ && narrowing <= max_narrowing_ && bodies)
             cuts.push_back ({depth, s.lat_min + (static_cast<float> (neck) + 0.5f) * s.bin});
         }
         std::sort (cuts.begin (), cuts.end (), [] (const Cut &x, const Cut &y) { return x.depth > y.depth; });
@@ -676,7 +710,8 @@ agex::PersonSegmentation<PointT>::segment (pcl::PointCloud<pcl::Label> &labels, 
           measure (left.parts, left.stats);
           measure (right.parts, right.stats);
           // Each side a person of its own, and not a sliver (an arm beside the head).
-          if (verdict (left.stats) == PersonVerdict::kPerson && verdict (right.stats) == PersonVerdict::kPerson &&
+          if (verdict (left.parts, left.stats) == PersonVerdict::kPerson &&
+              verdict (right.parts, right.stats) == PersonVerdict::kPerson &&
               left.stats.area >= 0.2 * s.area && right.stats.area >= 0.2 * s.area)
           {
             stack.push_back (left.parts[0]);
@@ -721,7 +756,7 @@ agex::PersonSegmentation<PointT>::segment (pcl::PointCloud<pcl::Label> &labels, 
         both.parts = people[i].parts;
         both.parts.insert (both.parts.end (), people[j].parts.begin (), people[j].parts.end ());
         measure (both.parts, both.stats);
-        if (verdict (both.stats) != PersonVerdict::kPerson)
+        if (verdict (both.parts, both.stats) != PersonVerdict::kPerson)
           continue;
         both.verdict = PersonVerdict::kPerson;
         both.split = people[i].split || people[j].split;
@@ -864,6 +899,7 @@ agex::PersonSegmentation<PointT>::segment (pcl::PointCloud<pcl::Label> &labels, 
     std::sort (candidates.begin (), candidates.end ());
     const auto label = static_cast<std::uint32_t> (k);
     auto &indices = found[k];
+    indices.reserve (candidates.size () * step * step);
     Eigen::Vector3d &sum = sums[k];
     for (std::size_t row_start = 0; row_start < candidates.size ();)
     {
@@ -880,11 +916,14 @@ agex::PersonSegmentation<PointT>::segment (pcl::PointCloud<pcl::Label> &labels, 
           // Pixels of a block are up to a cell apart from the cells' points.
           const float lo = zlo[c] - detail::personDepthGap (zlo[c], coarse_spacing, max_slope_, noise, min_gap_);
           const float hi = zhi[c] + detail::personDepthGap (zhi[c], coarse_spacing, max_slope_, noise, min_gap_);
+          Eigen::Vector3f block_sum = Eigen::Vector3f::Zero ();
           for (int u = u0; u < u1; ++u)
           {
             const int i = v * width + u;
             const PointT &p = cloud[i];
-            if (!(p.z >= lo && p.z <= hi) || labels[i].label != kUnlabelled || !usable (i))
+            // The depth test first: it also rejects a NaN depth; x + y is finite only if both are.
+            if (!(p.z >= lo && p.z <= hi) || labels[i].label != kUnlabelled || !std::isfinite (p.x + p.y) ||
+                !(fake_indices_ || selected[i]) || !(p.z > 0.f))
               continue;
             if (with_floor && heightOf (p) < floorMargin (p.z))
               continue;
@@ -899,8 +938,9 @@ agex::PersonSegmentation<PointT>::segment (pcl::PointCloud<pcl::Label> &labels, 
             }
             labels[i].label = label;
             indices.push_back (i);
-            sum += p.getVector3fMap ().template cast<double> ();
+            block_sum += p.getVector3fMap ();
           }
+          sum += block_sum.cast<double> ();
         }
       row_start = row_end;
     }

@@ -49,7 +49,8 @@ struct DepthCamera
 enum class Pose
 {
   ArmsDown,
-  ArmsRaised  ///< "goalpost": upper arms out level with the shoulders, forearms up
+  ArmsRaised,  ///< "goalpost": upper arms out level with the shoulders, forearms up
+  Seated       ///< on a seat 0.45 m high, thighs towards the camera, hands on them
 };
 
 /** A room of spheres, capsules and boxes over a level floor, in camera coordinates (x
@@ -91,6 +92,23 @@ struct Scene
   {
     const double s = height / 1.75;
     auto P = [&] (double dx, double h, double dz = 0.0) { return at (x + dx * s, h * s, z + dz * s); };
+    if (pose == Pose::Seated)
+    {
+      spheres.push_back ({P (0, 1.2), 0.105 * s});  // head: top at 1.3 m
+      capsules.push_back ({P (0, 1.02), P (0, 1.12), 0.055 * s});
+      capsules.push_back ({P (-0.08, 0.68), P (-0.08, 0.9), 0.14 * s});
+      capsules.push_back ({P (0.08, 0.68), P (0.08, 0.9), 0.14 * s});
+      capsules.push_back ({P (-0.09, 0.55), P (0.09, 0.55), 0.12 * s});
+      for (const double side : {-1.0, 1.0})
+      {
+        capsules.push_back ({P (0.1 * side, 0.5), P (0.1 * side, 0.5, -0.42), 0.07 * s});            // thigh
+        capsules.push_back ({P (0.1 * side, 0.5, -0.42), P (0.1 * side, 0.1, -0.42), 0.06 * s});     // shin
+        capsules.push_back ({P (0.1 * side, 0.05, -0.42), P (0.1 * side, 0.05, -0.58), 0.045 * s});  // foot
+        capsules.push_back ({P (0.24 * side, 0.97), P (0.26 * side, 0.68, -0.05), 0.05 * s});        // upper arm
+        capsules.push_back ({P (0.26 * side, 0.68, -0.05), P (0.2 * side, 0.6, -0.32), 0.045 * s});  // forearm
+      }
+      return;
+    }
     spheres.push_back ({P (0, 1.625), 0.105 * s});                 // head: top at 1.73 m
     capsules.push_back ({P (0, 1.44), P (0, 1.55), 0.055 * s});    // neck
     capsules.push_back ({P (-0.08, 1.1), P (-0.08, 1.32), 0.14 * s});  // torso, two halves
@@ -341,6 +359,23 @@ TEST (PersonSegmentation, RaisedArmsBesideTheHeadAreNoSecondPerson)
   double recall, precision;
   overlap (found.persons[0], personMask (0.0, 2.5, cam, Pose::ArmsRaised), recall, precision);
   EXPECT_GT (recall, 0.95);
+}
+
+TEST (PersonSegmentation, SeatedPersonOnAChairIsOnePerson)
+{
+  Scene scene;
+  scene.addChair (0.2, 3.05, 0.95);  // the backrest just behind the person's back
+  scene.addPerson (0.2, 2.85, 1.75, Pose::Seated);
+  scene.addDesk (-1.5, -0.5, 2.5, 3.1);
+  const DepthCamera cam;
+  const Cloud::Ptr cloud = scene.render (cam);
+  const Found found = segment (cloud);
+  ASSERT_EQ (found.persons.size (), 1u);
+  EXPECT_NEAR (found.infos[0].top, 1.3, 0.08);
+  double recall, precision;
+  overlap (found.persons[0], personMask (0.2, 2.85, cam, Pose::Seated), recall, precision);
+  EXPECT_GT (recall, 0.9);
+  EXPECT_GT (precision, 0.8);  // some of the chair may come with the person
 }
 
 TEST (PersonSegmentation, PersonCutInTwoByARailingInFrontIsOnePerson)

@@ -137,7 +137,8 @@ agex::PersonSegmentation<PointT>::validParameters () const
   auto non_negative = [] (float v) { return std::isfinite (v) && v >= 0.f; };
   return up_.allFinite () && up_.norm () > 0.f && floor_max_tilt_deg_ >= 0.f && floor_max_tilt_deg_ < 90.f &&
          positive (floor_distance_) && non_negative (min_floor_spread_) && non_negative (fx_) &&
-         non_negative (fy_) && coarse_step_ >= 0 && coarse_step_ <= 64 && non_negative (depth_noise_) && non_negative (max_slope_) && positive (min_gap_) &&
+         non_negative (fy_) && coarse_step_ >= 0 && coarse_step_ <= 64 && non_negative (depth_noise_) &&
+         non_negative (max_slope_) && positive (min_gap_) &&
          non_negative (min_top_) && positive (max_top_) && min_top_ < max_top_ && non_negative (max_bottom_) &&
          positive (max_width_) && non_negative (min_area_) && positive (crown_drop_) && positive (max_crown_ratio_) &&
          positive (min_head_distance_) && positive (min_valley_depth_) && max_narrowing_ > 0.f &&

@@ -507,6 +507,25 @@ TEST (PersonSegmentation, GivenFloorAndIndicesAreHonoured)
   EXPECT_TRUE (seg.getFloorPlane ().isApprox (Eigen::Vector4f (0.f, -1.f, 0.f, 1.f)));
   EXPECT_EQ (found.persons.size (), 2u);
 
+  // The same plane written the other way round.
+  seg.setFloorPlane (Eigen::Vector4f (0.f, 1.f, 0.f, -1.f));
+  found = segment (cloud, &seg);
+  EXPECT_TRUE (seg.getFloorPlane ().isApprox (Eigen::Vector4f (0.f, -1.f, 0.f, 1.f)));
+  EXPECT_EQ (found.persons.size (), 2u);
+
+  // The floor's points already removed: found only when the plane is given.
+  Cloud::Ptr no_floor (new Cloud (*cloud));
+  for (auto &p : *no_floor)
+    if (1.f - p.y < 0.04f)
+      p = agex_test::nanPoint ();
+  Segmentation alone;
+  found = segment (no_floor, &alone);
+  EXPECT_FALSE (alone.getFloorFound ());
+  seg.setFloorPlane (Eigen::Vector4f (0.f, -1.f, 0.f, 1.f));
+  found = segment (no_floor, &seg);
+  ASSERT_EQ (found.persons.size (), 2u);
+  EXPECT_TRUE (found.infos[0].on_floor);
+
   // A floor 0.9 m too high leaves nobody tall enough.
   seg.setFloorPlane (Eigen::Vector4f (0.f, -1.f, 0.f, 0.1f));
   found = segment (cloud, &seg);

@@ -129,8 +129,11 @@ public:
   /** Label of points that belong to no person. */
   static constexpr std::uint32_t kUnlabelled = std::numeric_limits<std::uint32_t>::max ();
 
-  /** \brief Uses this floor (unit normal pointing up, n.p + d = height above the floor;
-    * any scale is normalised) instead of searching for one. */
+  /** \brief Uses this floor (n.p + d = height above the floor, as
+    * agex::FloorRemoval::getFloorPlane gives it; any scale is normalised, and a normal
+    * pointing away from the up axis is turned round) instead of searching for one. Give it
+    * whenever the floor's points are already gone (NaN) from the input: without them none
+    * is found and the floor-free rule applies. */
   void setFloorPlane (const Eigen::Vector4f &plane)
   {
     given_floor_ = plane;

@@ -305,6 +305,8 @@ agex::PersonSegmentation<PointT>::segment (pcl::PointCloud<pcl::Label> &labels, 
   if (floor_given_)
   {
     floor_plane_ = given_floor_ / given_floor_.head<3> ().norm ();
+    if (floor_plane_.head<3> ().dot (up_) < 0.f)
+      floor_plane_ = -floor_plane_;  // heights grow upwards whichever way the plane was written
     floor_found_ = true;
   }
   else

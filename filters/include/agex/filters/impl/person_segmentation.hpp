@@ -460,6 +460,12 @@ agex::PersonSegmentation<PointT>::segment (pcl::PointCloud<pcl::Label> &labels, 
       }
     if (!s.cells)
       return;
+    if (s.area < min_area_)
+    {
+      // Too small for anyone (a possible piece of someone): the bins are not needed.
+      s.width = s.width_across = std::max (s.lat_max - s.lat_min, s.fwd_max - s.fwd_min);
+      return;
+    }
     // Bins across (lat) and along (fwd) the view: upright extent and the crown, the cells
     // within the crown drop (plus twice the noise) of the top.
     s.bin = std::max (0.05f, 1.5f * coarse_spacing * s.zMean ());

@@ -2,6 +2,7 @@
 
 #include <pcl/PointIndices.h>
 #include <pcl/pcl_base.h>
+#include <pcl/point_cloud.h>
 #include <pcl/point_types.h>
 
 #include <Eigen/Core>
@@ -49,8 +50,8 @@ struct PersonInfo
   * denoised, floor removed). The steps (doc/pipeline.md, "People"):
   *
   * 1. **Coarse grid.** Candidates are found on one point per step x step block of pixels
-  *    (setCoarseStep; by default cells 1.5 cm across per metre of depth whatever the
-  *    resolution: step 8 at 640x480, 3 at 144x176). The people's own pixels are taken at
+  *    (setCoarseStep; by default cells 2 cm across per metre of depth whatever the
+  *    resolution: step 11 at 640x480, 4 at 144x176). The people's own pixels are taken at
   *    full resolution at the end.
   * 2. **Floor.** The plane given with setFloorPlane (n.p + d = height above the floor, as
   *    agex::FloorRemoval::getFloorPlane returns it), or else agex::FloorRemoval run on the
@@ -175,10 +176,10 @@ public:
   float getUsedFocalLengthX () const { return used_fx_; }
   float getUsedFocalLengthY () const { return used_fy_; }
 
-  /** Angle a coarse cell spans by default: 1.5 cm per metre of depth, so that cost and
-    * what the cells resolve do not depend on the resolution (step 8 at 640x480 with
-    * f = 525, 3 at 144x176 with f = 210). */
-  static constexpr float kAutoCellAngle = 0.015f;
+  /** Angle a coarse cell spans by default: 2 cm per metre of depth, so that cost and what
+    * the cells resolve do not depend on the resolution (step 11 at 640x480 with f = 525,
+    * 4 at 144x176 with f = 210: 1,600-3,100 cells). */
+  static constexpr float kAutoCellAngle = 0.02f;
   /** Coarse grid step in pixels; 0 (default): kAutoCellAngle times the focal length. */
   void setCoarseStep (int pixels) { coarse_step_ = pixels; }
   int getCoarseStep () const { return coarse_step_; }
@@ -313,6 +314,7 @@ private:
   float fallback_min_extent_ = 0.3f, min_background_fraction_ = 0.5f;
   float hand_area_ = 0.01f, min_hand_pixels_ = 50.f;
   std::vector<PersonInfo> infos_;
+  pcl::PointCloud<pcl::Label> scratch_labels_;
 };
 
 /** \brief The person of each mesh: the label (from PersonSegmentation::segment) most of

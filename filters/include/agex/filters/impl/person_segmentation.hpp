@@ -160,8 +160,9 @@ agex::PersonSegmentation<PointT>::getTooFar () const
 template <typename PointT> void
 agex::PersonSegmentation<PointT>::segment (std::vector<pcl::PointIndices> &persons)
 {
-  pcl::PointCloud<pcl::Label> labels;
-  segment (labels, persons);
+  // The labels are needed inside; kept between calls, a frame's worth of them is not
+  // allocated (and paged in) anew for every frame.
+  segment (scratch_labels_, persons);
 }
 
 template <typename PointT> void

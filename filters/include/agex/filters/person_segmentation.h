@@ -223,7 +223,7 @@ public:
   /** The narrow-top rule: the crown, the cells within drop metres (plus twice the depth
     * noise) of the top, spans across the view without a gap at most ratio times the width
     * of the upright parts across the view (defaults 0.05 m and 0.75). A head is narrower
-    * than the shoulders and hips below it (with hands on it too, 0.45 m against 0.7 m;
+    * than the shoulders and hips below it (with hands on it too, 0.45 m against 0.65 m;
     * raised hands count each on their own; seen from the side, the head's 0.2 m against the
     * body's 0.3 m); a chair's back, a cabinet, a table, a lamp are as wide on top as below
     * or wider, also when cut off by the image's side or seen from the side. */

@@ -97,6 +97,7 @@ main (int argc, char **argv)
                             {"detections", nlohmann::json::array ()}};
       for (const auto &d : detections)
         doc["detections"].push_back (agex::toJson (d));
+      doc["persons"] = agex::apps::personsJson (prepared.person_info);
       doc["ms"] = nlohmann::json::object ();
       for (const auto &[stage, ms] : prepared.ms)
         if (stage != "total")

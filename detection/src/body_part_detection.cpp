@@ -14,6 +14,7 @@ toJson (const BodyPartDetection &d)
           {"orientation", {d.orientation.x (), d.orientation.y (), d.orientation.z ()}},
           {"pixel", {d.u, d.v}},
           {"rank", d.rank},
-          {"mesh", d.mesh}};
+          {"mesh", d.mesh},
+          {"person", d.person}};
 }
 }  // namespace agex

@@ -87,6 +87,8 @@ DepthPipelineParams::toJson () const
           {"mixed_window_radius", mixed_window_radius},
           {"mixed_min_jump", mixed_min_jump},
           {"mixed_max_veil_angle_deg", mixed_max_veil_angle_deg},
+          {"isolate_people", isolate_people},
+          {"use_crop_box", use_crop_box},
           {"crop_min", vec (crop_min)},
           {"crop_max", vec (crop_max)},
           {"remove_floor", remove_floor},
@@ -149,6 +151,9 @@ DepthPipelineParams::fromJson (const nlohmann::json &doc, const std::string &sou
   q.mixed_window_radius = integer ("mixed_window_radius", -kWide, kWide);
   q.mixed_min_jump = static_cast<float> (number ("mixed_min_jump", -kWide, kWide));
   q.mixed_max_veil_angle_deg = static_cast<float> (number ("mixed_max_veil_angle_deg", -kWide, kWide));
+  // Models of agex 0.1 know no people: their crop box isolated the person.
+  q.isolate_people = doc.contains ("isolate_people") ? boolean ("isolate_people") : false;
+  q.use_crop_box = doc.contains ("use_crop_box") ? boolean ("use_crop_box") : true;
   q.crop_min = vector ("crop_min");
   q.crop_max = vector ("crop_max");
   q.remove_floor = boolean ("remove_floor");

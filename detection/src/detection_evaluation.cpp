@@ -236,7 +236,7 @@ CandidateCoverage::addFrame (const pcl::PointCloud<InterestPoint> &agex_points,
     {
       const bool n = near (cand.position);
       any = any || n;
-      modes = modes || (n && (cand.sources & (kFromModeTip | kFromModePosition)));
+      modes = modes || (n && (cand.sources & (kFromModeTip | kFromModePosition | kFromModeEnd)));
     }
     covered_[0][c] += agex5;
     covered_[1][c] += agex_all;

@@ -119,18 +119,30 @@ fusedCandidates (const DepthPipelineResult &prepared, const std::vector<PartMode
   {
     if (m.part < 0 || m.part >= kParts || !(m.confidence >= params.min_mode_confidence))
       continue;
-    for (const bool tip : {true, false})
+    // The tip, the peak, and the other end of the part along its direction: a resting hand's
+    // direction may point the wrong way (away from the hip it touches), its fingers at the
+    // other end.
+    int other_end = -1;
+    float lowest = std::numeric_limits<float>::infinity ();
+    for (const auto i : m.support)
+      if (i >= 0 && static_cast<std::size_t> (i) < prepared.filtered->size ())
+      {
+        const float t = ((*prepared.filtered)[static_cast<std::size_t> (i)].getVector3fMap () - m.position).dot (m.direction);
+        if (std::isfinite (t) && t < lowest)
+          lowest = t, other_end = static_cast<int> (i);
+      }
+    for (const int which : {0, 1, 2})
     {
       FusedCandidate c;
-      c.index = tip ? m.tip_index : nearestPixel (*prepared.filtered, m.support, m.position);
+      c.index = which == 0 ? m.tip_index : which == 1 ? nearestPixel (*prepared.filtered, m.support, m.position) : other_end;
       if (c.index < 0 || static_cast<std::size_t> (c.index) >= prepared.filtered->size ())
         continue;
       // On the surface the pixel shows: the patch is cut around it.
       c.position = (*prepared.filtered)[static_cast<std::size_t> (c.index)].getVector3fMap ();
       if (!c.position.allFinite ())
         continue;
-      c.orientation = m.direction;
-      c.sources = tip ? kFromModeTip : kFromModePosition;
+      c.orientation = which == 2 ? Eigen::Vector3f (-m.direction) : m.direction;
+      c.sources = which == 0 ? kFromModeTip : which == 1 ? kFromModePosition : kFromModeEnd;
       c.mode_part = m.part;
       c.mode_confidence = m.confidence;
       addMerged (candidates, c, params.merge_radius);
@@ -155,7 +167,7 @@ fusedFeatureNames ()
     for (int p = 0; p < kParts; ++p)
       n.push_back (std::string ("mode_") + parts[p] + "_direction_agreement");
     for (const char *f : {"from_agex", "agex_rank", "geodesic_distance", "from_mode_tip", "from_mode_position",
-                          "height_in_mesh", "mesh_height"})
+                          "from_mode_end", "height_in_mesh", "mesh_height"})
       n.push_back (f);
     return n;
   }();
@@ -256,6 +268,7 @@ FusedFeatures::compute (const FusedCandidate &c, float *out) const
   *f++ = std::isfinite (c.geodesic_distance) ? c.geodesic_distance : 0.f;
   *f++ = (c.sources & kFromModeTip) ? 1.f : 0.f;
   *f++ = (c.sources & kFromModePosition) ? 1.f : 0.f;
+  *f++ = (c.sources & kFromModeEnd) ? 1.f : 0.f;
   // Where on its person.
   int mesh = c.mesh;
   if (mesh < 0 && c.index >= 0 && static_cast<std::size_t> (c.index) < mesh_of_.size ())

@@ -18,7 +18,7 @@ head -c 20000 in/frame.png > in/truncated.png
 : > in/empty.png
 head -c 1000 /dev/zero > in/wrong_size.u16
 head -c 100000 in/model.yml > in/truncated_model.yml
-sed 's/^format_version: 1$/format_version: 2/' in/model.yml > in/version2_model.yml
+sed 's/^format_version: 1$/format_version: 3/' in/model.yml > in/version3_model.yml
 head -c $((176 * 144 * 2)) /dev/zero | tr '\0' '\7' > in/wall_176x144.u16
 # A 176x144 .u16 camera: its size and intrinsics (depth images of 640x480 need none).
 SR="--width 176 --height 144 --fx 250 --fy 250 --cx 87.5 --cy 71.5"
@@ -87,7 +87,7 @@ grep -q '"interest_points":\[\]' <(tr -d ' \n' < out/all_nan.json) || { echo "FA
 check "1-pixel meshes only (isolated pixels)" 0 "" $K in/one_pixel_specks_640x480.png --min-mesh-size 1 --json out/specks.json
 check "missing frame" 1 "nope.png: no such file" $D in/nope.png --json out/a.json
 # Models.
-check "model of another format version" 1 "version2_model.yml: model format version 2 is not supported" $D in/frame.png --model in/version2_model.yml --json out/a.json
+check "model of another format version" 1 "version3_model.yml: model format version 3 is not supported" $D in/frame.png --model in/version3_model.yml --json out/a.json
 check "truncated model" 1 "truncated_model.yml: damaged model file" $D in/frame.png --model in/truncated_model.yml --json out/a.json
 check "a PNG given as the model" 1 "frame.png: not an agex model" $D in/frame.png --model in/frame.png --json out/a.json
 # Datasets.
@@ -102,7 +102,7 @@ S=$BIN/agex_synth
 check "truncated BVH motion" 1 "truncated.bvh:5: " $S --motion in/truncated.bvh --frames 3 --sensor sr4000 --output out/synth
 check "missing BVH motion" 1 "nope.bvh: cannot open BVH file" $S --motion in/nope.bvh --frames 3 --output out/synth
 check "unknown sensor" 1 "unknown --sensor .nosuch." $S --motion in/truncated.bvh --frames 3 --sensor nosuch --output out/synth
-check "train on a dataset without labels" 1 "training on 0 patches from 0 frames" $T --dataset in/dataset --out out/model.yml
+check "train on a dataset without labels" 1 "no training examples: no labelled frame with a body" $T --dataset in/dataset --out out/model.yml
 check "train on a damaged labels.csv" 1 "labels.csv:2: expected 15" $T --dataset in/ds_truncated_labels --out out/model.yml
 [ ! -e out/synth ] && [ ! -e out/model.yml ] || { echo "FAILED: a failed run left an output" >&2; failures=$((failures + 1)); }
 # Outputs.
@@ -152,9 +152,9 @@ echo "my notes" > in/notes.txt
 (cd in && find . -type f -print0 | sort -z | xargs -0 sha256sum) > inputs.sha256
 check "JSON over the model" 1 "model.yml: output would overwrite an input" $D in/frame.png --model in/model.yml --json in/model.yml
 check "JSON lines over a dataset's labels" 1 "labels.csv: output would overwrite an input" $D in/dataset --json in/dataset/labels.csv
-check "report over a dataset's labels" 1 "labels.csv: output would overwrite an input" $E detect --dataset in/dataset --json in/dataset/labels.csv
-check "plot over a dataset frame" 1 "wall_176x144.pcd: output would overwrite an input" $E coverage --dataset in/dataset --plot in/dataset/frames/wall_176x144.pcd
-check "model over a dataset's labels" 1 "labels.csv: output would overwrite an input" $T --dataset in/dataset --out in/dataset/labels.csv
+check "report over a dataset's labels" 1 "labels.csv: output would land inside the input dataset" $E detect --dataset in/dataset --json in/dataset/labels.csv
+check "plot over a dataset frame" 1 "wall_176x144.pcd: output would land inside the input dataset" $E coverage --dataset in/dataset --plot in/dataset/frames/wall_176x144.pcd
+check "model over a dataset's labels" 1 "labels.csv: output would land inside the input dataset" $T --dataset in/dataset --out in/dataset/labels.csv
 check "benchmark over a dataset frame" 1 "wall_176x144.pcd: output would overwrite an input" $BIN/agex_bench --dataset in/dataset --json in/dataset/frames/wall_176x144.pcd
 check "batch JSON lines onto a file that is not a batch result" 1 "notes.txt: line 1 is not a frame result" $D in/batch $SR --json in/notes.txt
 check "a directory without frames" 1 "no_frames: no frames" $D in/no_frames --json out/none.jsonl

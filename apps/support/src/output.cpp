@@ -269,5 +269,21 @@ renderPlot (const Plot &plot, int width, int height)
   }
   return image;
 }
+nlohmann::json
+personsJson (const std::vector<PersonInfo> &persons)
+{
+  nlohmann::json doc = nlohmann::json::array ();
+  for (std::size_t k = 0; k < persons.size (); ++k)
+  {
+    const PersonInfo &p = persons[k];
+    doc.push_back ({{"id", k},
+                    {"pixels", p.points},
+                    {"distance", p.distance},
+                    {"height", p.top},
+                    {"on_floor", p.on_floor},
+                    {"too_far", p.too_far}});
+  }
+  return doc;
+}
 }  // namespace apps
 }  // namespace agex

@@ -103,8 +103,8 @@ pipelineOptionsDescription (DepthPipelineParams &p, std::vector<std::string> &st
   storage[0] = formatVector (p.crop_min);
   storage[1] = formatVector (p.crop_max);
   storage[2] = formatVector (p.up);
-  po::options_description desc ("Pipeline (defaults isolate a person 1.3-2.6 m in front of the sensor,\n"
-                                 "within 0.75 m of its optical axis, as in the Bonn frames)");
+  po::options_description desc ("Pipeline (defaults: people found by agex::PersonSegmentation, no crop box;\n"
+                                 "doc/pipeline.md)");
   desc.add_options ()
     ("k", po::value (&p.k)->default_value (p.k), "AGEX points per mesh, centroid included")
     ("delta-connected", floatValue (&p.delta_connected),
@@ -125,6 +125,10 @@ pipelineOptionsDescription (DepthPipelineParams &p, std::vector<std::string> &st
      "smallest depth jump with mixed pixels, metres")
     ("mixed-max-angle", floatValue (&p.mixed_max_veil_angle_deg),
      "largest angle between a jump and the viewing ray, degrees")
+    ("no-person-isolation", po::bool_switch ()->notifier ([&p] (bool off) { p.isolate_people = !off; }),
+     "no agex::PersonSegmentation: the crop box alone isolates the person")
+    ("crop-box", po::bool_switch ()->notifier ([&p] (bool on) { p.use_crop_box = p.use_crop_box || on; }),
+     "keep only the points inside --crop-min/--crop-max (also with people)")
     ("crop-min", po::value (&storage[0])->default_value (storage[0]), "bounding box minimum x,y,z, metres")
     ("crop-max", po::value (&storage[1])->default_value (storage[1]), "bounding box maximum x,y,z, metres")
     ("no-floor-removal", po::bool_switch ()->notifier ([&p] (bool off) { p.remove_floor = !off; }),

@@ -66,6 +66,8 @@ trainDetector (const std::vector<DepthPatch> &patches, const std::vector<std::ve
                const std::vector<int> &classes, const PatchClassifierParams &params, const PatchGeometry &geometry,
                const DetectorSettings &settings)
 {
+  if (patches.empty ())
+    throw std::runtime_error ("no training examples: no labelled frame with a body in the datasets");
   std::array<int, 4> counts{};
   for (const int c : classes)
     ++counts[c < 0 ? 3 : c];

@@ -23,11 +23,12 @@ struct BodyPartDetection
   int u = 0, v = 0;  ///< pixel column and row in the frame
   int rank = 0;      ///< rank of the AGEX point it was found at (0: not an AGEX point)
   int mesh = -1;     ///< surface mesh it lies on (-1: unknown)
+  int person = -1;   ///< the person it belongs to (DepthPipelineResult::persons; -1: unknown)
   /** Sliding windows: the window's extent over the trained one (AGEX points: 1). */
   float scale = 1.f;
 };
 
 /** The detection as agex's JSON outputs write it: class, confidence, margin, position,
-  * orientation, pixel, rank, mesh. */
+  * orientation, pixel, rank, mesh, person. */
 nlohmann::json toJson (const BodyPartDetection &detection);
 }  // namespace agex

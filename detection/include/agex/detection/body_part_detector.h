@@ -129,6 +129,8 @@ private:
   void detectFromModes (std::vector<BodyPartDetection> &detections);
   /** A fused model's candidates named by its classifier ("patches", "classify" timings). */
   void classifyFused (std::vector<BodyPartDetection> &detections);
+  /** Each detection's person (from its pixel's mesh); drops those of persons too far away. */
+  void assignPersons (std::vector<BodyPartDetection> &detections) const;
   /** Keeps the most confident detection of a class within the suppression radius, sorted. */
   void suppress (std::vector<BodyPartDetection> &candidates, std::vector<BodyPartDetection> &detections) const;
 

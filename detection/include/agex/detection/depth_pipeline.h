@@ -1,6 +1,7 @@
 #pragma once
 
 #include <agex/common/point_types.h>
+#include <agex/filters/person_segmentation.h>
 
 #include <pcl/PointIndices.h>
 #include <pcl/pcl_base.h>
@@ -31,7 +32,11 @@ struct DepthPipelineParams
   int mixed_window_radius = 2;
   float mixed_min_jump = 0.05f;
   float mixed_max_veil_angle_deg = 15.f;
-  // Bounding box in the camera frame, metres (pcl::CropBox).
+  // People (agex::PersonSegmentation): the person pixels are what the later stages see, and
+  // its floor is the floor. Off: the crop box alone isolates the person (models of agex 0.1).
+  bool isolate_people = true;
+  // Bounding box in the camera frame, metres (pcl::CropBox); off by default (it fits one room).
+  bool use_crop_box = false;
   Eigen::Vector3f crop_min = Eigen::Vector3f (-0.75f, -1.5f, 1.3f);
   Eigen::Vector3f crop_max = Eigen::Vector3f (0.75f, 1.5f, 2.6f);
   // Floor (agex::FloorRemoval).
@@ -75,6 +80,12 @@ struct DepthPipelineResult
   pcl::PointCloud<agex::InterestPoint> interest_points;
   bool floor_found = false;
   Eigen::Vector4f floor_plane = Eigen::Vector4f::Zero ();  ///< n.p + d = height above the floor
+  /** With isolate_people: one index set per person (pixels of the frame, before cleaning),
+    * its facts (agex::PersonInfo: distance, height, too_far, ...), and per mesh its person
+    * (-1: none). Without: empty, and every mesh's person is -1. */
+  std::vector<pcl::PointIndices> persons;
+  std::vector<PersonInfo> person_info;
+  std::vector<int> mesh_person;
   int mixed_pixels_removed = 0;
   int spur_iterations = 0;  ///< erosion passes actually run
   /** Stage name -> milliseconds, in order (crop, mixed_pixels, denoise, floor, spurs,
@@ -85,10 +96,12 @@ struct DepthPipelineResult
   std::vector<int> meshIndices () const;
 };
 
-/** \brief The depth stages composed as the detector runs them: frame -> crop box ->
-  * mixed-pixel removal -> median denoise -> floor removal -> spur removal -> surface
-  * meshes -> AGEX. Each stage is a PCL or agex class used as a PCL user would; this class
-  * wires them together and times them.
+/** \brief The depth stages composed as the detector runs them: frame -> people
+  * (agex::PersonSegmentation; and/or a crop box) -> mixed-pixel removal -> median denoise ->
+  * floor removal (the people's floor, or agex::FloorRemoval without them) -> spur removal ->
+  * surface meshes -> AGEX. Each stage is a PCL or agex class used as a PCL user would; this
+  * class wires them together and times them. Meshes belong to people (mesh_person); a
+  * person too far for its hands to have pixels enough is still segmented and flagged.
   *
   * setIndices limits the frame to those pixels (the rest is treated as invalid). Any
   * organized input of an XYZ point type is taken; the stages run on its XYZ copy. Empty,

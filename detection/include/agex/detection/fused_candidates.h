@@ -35,6 +35,7 @@ enum FusedCandidateSource : unsigned
   kFromAgex = 1u,          ///< an AGEX point
   kFromModeTip = 2u,       ///< a part mode's tip
   kFromModePosition = 4u,  ///< a part mode's position (its density's peak)
+  kFromModeEnd = 8u,       ///< the other end of a part mode from its tip, along its direction
 };
 
 struct FusedCandidate
@@ -61,9 +62,10 @@ struct FusedCandidateParams
   void validate (const std::function<std::string (const std::string &key)> &name) const;
 };
 
-/** \brief The candidates of a frame: every AGEX point of the pipeline's result, then the tip and
-  * the position of every part mode (of head, hand or foot), each dropped when an earlier
-  * candidate lies within merge_radius (whose sources then include it). */
+/** \brief The candidates of a frame: every AGEX point of the pipeline's result, then the tip,
+  * the position and the other end (the supporting pixel least far along its direction) of
+  * every part mode (of head, hand or foot), each dropped when an earlier candidate lies within
+  * merge_radius (whose sources then include it). */
 std::vector<FusedCandidate> fusedCandidates (const DepthPipelineResult &prepared, const std::vector<PartMode> &modes,
                                              const FusedCandidateParams &params);
 

@@ -6,6 +6,7 @@
 #include <agex/classification/part_modes.h>
 #include <agex/common/point_types.h>
 #include <agex/detection/body_part_detection.h>
+#include <agex/filters/person_segmentation.h>
 #include <agex/io/dataset.h>
 
 #include <pcl/PointIndices.h>
@@ -73,5 +74,9 @@ cv::Mat renderDetections (const pcl::PointCloud<pcl::PointXYZ> &frame, const std
   * rows are enlarged by a whole factor. */
 cv::Mat renderPartLabels (const pcl::PointCloud<pcl::PointXYZ> &frame, const pcl::PointCloud<BodyPartLabelPoint> &labels,
                           const std::vector<PartMode> &modes, const std::vector<PartLabel> &truth);
+/** The people of a frame as agex_detect writes them: per person its id (its index),
+  * pixels, distance (median depth, m), height (top above the floor, m), and too_far (no
+  * parts looked for: too few pixels for a hand). */
+nlohmann::json personsJson (const std::vector<PersonInfo> &persons);
 }  // namespace apps
 }  // namespace agex

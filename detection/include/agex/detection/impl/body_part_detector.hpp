@@ -81,9 +81,36 @@ agex::BodyPartDetector<PointT>::compute (std::vector<BodyPartDetection> &detecti
     classifyFused (detections);
   else
     classify (detections, settings_.kind == DetectorKind::SlidingWindow);
+  assignPersons (detections);
   for (std::size_t i = first_later_stage; i < intermediate_.ms.size (); ++i)
     total += intermediate_.ms[i].second;
   intermediate_.ms.emplace_back ("total", total);
+}
+
+template <typename PointT> void
+agex::BodyPartDetector<PointT>::assignPersons (std::vector<BodyPartDetection> &detections) const
+{
+  const DepthPipelineResult &r = intermediate_;
+  if (r.persons.empty () || !r.filtered)
+    return;
+  std::vector<int> person_of (r.filtered->size (), -1);
+  for (std::size_t m = 0; m < r.meshes.size () && m < r.mesh_person.size (); ++m)
+    for (const auto i : r.meshes[m].indices)
+      person_of[static_cast<std::size_t> (i)] = r.mesh_person[m];
+  const int width = static_cast<int> (r.filtered->width);
+  std::vector<BodyPartDetection> kept;
+  for (auto &d : detections)
+  {
+    const int index = d.v * width + d.u;
+    if (index >= 0 && static_cast<std::size_t> (index) < person_of.size ())
+      d.person = person_of[static_cast<std::size_t> (index)];
+    // A person too far for its parts to have pixels enough gets no guesses (PersonInfo::too_far).
+    if (d.person >= 0 && static_cast<std::size_t> (d.person) < r.person_info.size () &&
+        r.person_info[static_cast<std::size_t> (d.person)].too_far)
+      continue;
+    kept.push_back (d);
+  }
+  detections.swap (kept);
 }
 
 template <typename PointT> bool

@@ -69,15 +69,47 @@ agex::DepthPipeline<PointT>::compute (DepthPipelineResult &result)
   }
   const bool organized = cloud->isOrganized () && !cloud->empty ();
 
-  // 1. Bounding box: which points we keep.
+  // 1. Which points we keep: the people's pixels, within the crop box if there is one.
   auto start = Clock::now ();
   pcl::IndicesPtr inside (new pcl::Indices);
+  pcl::PointCloud<pcl::Label> person_labels;
+  bool people_floor = false;
+  if (params.isolate_people && organized)
+  {
+    agex::PersonSegmentation<pcl::PointXYZ> people;
+    people.setInputCloud (cloud);
+    people.setUpAxis (params.up);
+    people.setFloorMaxTilt (params.floor_max_tilt_deg);
+    people.setFloorDistance (params.floor_distance);
+    people.segment (person_labels, result.persons);
+    result.person_info = people.getPersons ();
+    people_floor = people.getFloorFound ();
+    if (people_floor)
+    {
+      result.floor_found = true;
+      result.floor_plane = people.getFloorPlane ();
+    }
+    for (const auto &person : result.persons)
+      inside->insert (inside->end (), person.indices.begin (), person.indices.end ());
+    std::sort (inside->begin (), inside->end ());
+  }
+  else
+  {
+    for (std::size_t i = 0; i < cloud->size (); ++i)
+      inside->push_back (static_cast<int> (i));
+  }
+  result.ms.emplace_back ("people", msSince (start));
+  start = Clock::now ();
+  if (params.use_crop_box || !params.isolate_people)
   {
     pcl::CropBox<pcl::PointXYZ> crop;
     crop.setInputCloud (cloud);
+    crop.setIndices (inside);
     crop.setMin (Eigen::Vector4f (params.crop_min.x (), params.crop_min.y (), params.crop_min.z (), 1.f));
     crop.setMax (Eigen::Vector4f (params.crop_max.x (), params.crop_max.y (), params.crop_max.z (), 1.f));
-    crop.filter (*inside);
+    pcl::IndicesPtr boxed (new pcl::Indices);
+    crop.filter (*boxed);
+    inside = boxed;
   }
   result.ms.emplace_back ("crop", msSince (start));
 
@@ -124,9 +156,10 @@ agex::DepthPipeline<PointT>::compute (DepthPipelineResult &result)
   }
   result.ms.emplace_back ("denoise", msSince (start));
 
-  // 4. Floor, and everything below it.
+  // 4. Floor, and everything below it: the people's floor (their pixels are above it by
+  // construction), else RANSAC's.
   start = Clock::now ();
-  if (params.remove_floor && !cloud->empty ())
+  if (params.remove_floor && !cloud->empty () && !params.isolate_people)
   {
     agex::FloorRemoval<pcl::PointXYZ> floor;
     floor.setInputCloud (cloud);
@@ -195,6 +228,8 @@ agex::DepthPipeline<PointT>::compute (DepthPipelineResult &result)
     agex.compute (result.interest_points);
   }
   result.ms.emplace_back ("agex", msSince (start));
+  result.mesh_person = params.isolate_people ? agex::personOfMeshes (person_labels, result.meshes)
+                                             : std::vector<int> (result.meshes.size (), -1);
 
   double total = 0.0;
   for (const auto &stage : result.ms)

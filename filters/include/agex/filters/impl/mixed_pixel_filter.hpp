@@ -3,6 +3,7 @@
 #include <agex/common/organized_neighbourhood.h>
 #include <agex/filters/mixed_pixel_filter.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -73,12 +74,27 @@ agex::MixedPixelFilter<PointT>::applyFilter (pcl::Indices &indices)
   const float cos_max_veil_angle = cosMaxVeilAngle ();
   // Each point's range is needed by up to 16 tests of its neighbours: compute it once,
   // NaN for a non-finite point (what isMixed relies on to skip it).
-  ranges_.resize (input_->size ());
-  for (std::size_t i = 0; i < input_->size (); ++i)
+  // Only the window around the tested points is read: the ranges of a person's pixels and
+  // their neighbours, not of the whole frame.
+  const int width = static_cast<int> (input_->width);
+  int u_min = width, u_max = -1, v_min = static_cast<int> (input_->height), v_max = -1;
+  for (const auto index : *indices_)
   {
-    const PointT &p = (*input_)[i];
-    ranges_[i] = isFinitePoint (p) ? p.getVector3fMap ().norm () : std::numeric_limits<float>::quiet_NaN ();
+    const int u = index % width, v = index / width;
+    u_min = std::min (u_min, u), u_max = std::max (u_max, u);
+    v_min = std::min (v_min, v), v_max = std::max (v_max, v);
   }
+  ranges_.assign (input_->size (), std::numeric_limits<float>::quiet_NaN ());
+  u_min = std::max (0, u_min - window_radius_), u_max = std::min (width - 1, u_max + window_radius_);
+  v_min = std::max (0, v_min - window_radius_), v_max = std::min (static_cast<int> (input_->height) - 1, v_max + window_radius_);
+  for (int v = v_min; v <= v_max; ++v)
+    for (int u = u_min; u <= u_max; ++u)
+    {
+      const std::size_t i = static_cast<std::size_t> (v) * width + u;
+      const PointT &p = (*input_)[i];
+      if (isFinitePoint (p))
+        ranges_[i] = p.getVector3fMap ().norm ();
+    }
 
   indices.reserve (indices_->size ());
   for (const auto index : *indices_)

@@ -96,7 +96,8 @@ private:
     if (!cloud || !cloud->isOrganized ())
       return;
     SourceFrame frame;
-    frame.cloud = cloud;
+    // The consumer owns its frame (it may change it); PCL's stays the grabber's.
+    frame.cloud.reset (new pcl::PointCloud<pcl::PointXYZ> (*cloud));
     frame.sequence = sequence_++;
     frame.timestamp = static_cast<double> (cloud->header.stamp) * 1e-6;  // PCL stamps are microseconds
     char name[32];

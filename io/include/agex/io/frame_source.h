@@ -23,7 +23,7 @@ namespace agex
 /** One frame of a FrameSource. */
 struct SourceFrame
 {
-  pcl::PointCloud<pcl::PointXYZ>::ConstPtr cloud;  ///< organized, metres, NaN = invalid
+  pcl::PointCloud<pcl::PointXYZ>::Ptr cloud;  ///< organized, metres, NaN = invalid; the consumer's own
   /** The camera's pinhole intrinsics (depth images, datasets, cameras); has_intrinsics is
     * false for PCD files, which carry their points but no camera. */
   CameraIntrinsics intrinsics;

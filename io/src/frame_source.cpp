@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
+#include <sstream>
 #include <stdexcept>
 #include <thread>
 
@@ -250,7 +251,12 @@ public:
   }
   bool live () const override { return true; }
   std::uint64_t dropped () const override { return slot_.dropped (); }
-  std::string describe () const override { return source_->describe () + " replayed at " + std::to_string (fps_) + " fps"; }
+  std::string describe () const override
+  {
+    std::ostringstream text;
+    text << source_->describe () << " replayed at " << fps_ << " fps";
+    return text.str ();
+  }
 
 private:
   void produce ()

@@ -241,3 +241,40 @@ def test_bundled_data():
     assert os.path.isfile(agex.bundled_data_file("models/agex_bonn.yml"))
     assert agex.BodyPartDetector().model == agex.bundled_data_file("models/agex_bonn.yml")
     assert agex.__version__
+
+
+def test_the_documented_script_runs(tmp_path, monkeypatch):
+    """doc/examples/python/plot_detections.py (doc/python.md) against the module as built, with
+    matplotlib replaced by a stand-in that records what is drawn (matplotlib is not needed to
+    build or test agex)."""
+    import runpy
+    import sys
+    import types
+
+    drawn = []
+
+    class Anything:
+        def __init__(self, name):
+            self.name = name
+
+        def __getattr__(self, attribute):
+            return Anything(f"{self.name}.{attribute}")
+
+        def __call__(self, *args, **kwargs):
+            drawn.append((self.name, args, kwargs))
+            return (Anything("fig"), Anything("ax")) if self.name.endswith("subplots") else Anything(self.name)
+
+    matplotlib = types.ModuleType("matplotlib")
+    matplotlib.use = lambda backend: None
+    pyplot = types.ModuleType("matplotlib.pyplot")
+    pyplot.subplots = Anything("subplots")
+    pyplot.Circle = Anything("Circle")
+    matplotlib.pyplot = pyplot
+    monkeypatch.setitem(sys.modules, "matplotlib", matplotlib)
+    monkeypatch.setitem(sys.modules, "matplotlib.pyplot", pyplot)
+    out = tmp_path / "detections.png"
+    monkeypatch.setattr(sys, "argv", ["plot_detections.py", FRAME, str(out)])
+    runpy.run_path(os.path.join(SOURCE, "doc", "examples", "python", "plot_detections.py"), run_name="__main__")
+    confident = [d for d in agex.BodyPartDetector().detect(agex.load_frame(FRAME)) if d["confidence"] >= 0.5]
+    assert sum(name == "Circle" for name, _, _ in drawn) == len(confident) > 0
+    assert any(name == "fig.savefig" and args[0] == str(out) for name, args, _ in drawn)

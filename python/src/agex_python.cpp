@@ -19,6 +19,7 @@
 #include <opencv2/core.hpp>
 
 #include <cmath>
+#include <cstdint>
 #include <filesystem>
 #include <limits>
 #include <memory>
@@ -239,7 +240,8 @@ frameFromArray (const py::array &input, double fx, double fy, double cx, double 
   }
   // Rows of contiguous pixels are read in place, whatever the row step; anything else is copied once.
   const auto item = depth.itemsize ();
-  if (!(depth.strides (1) == item && depth.strides (0) >= cols * item && depth.strides (0) % item == 0))
+  if (!(depth.strides (1) == item && depth.strides (0) >= cols * item && depth.strides (0) % item == 0 &&
+        reinterpret_cast<std::uintptr_t> (depth.data ()) % static_cast<std::uintptr_t> (item) == 0))
     depth = py::array::ensure (depth, py::array::c_style);
   const cv::Mat image (static_cast<int> (rows), static_cast<int> (cols), type, const_cast<void *> (depth.data ()),
                        static_cast<std::size_t> (depth.strides (0)));

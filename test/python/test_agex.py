@@ -103,6 +103,13 @@ def test_arrays_of_any_layout_give_the_same_result(detector, grey):
     every_other = np.zeros((480, 1280), np.uint8)
     every_other[:, ::2] = grey
     assert detector.detect(every_other[:, ::2], **KINECT, depth_scale=BONN_SCALE) == expected
+    # uint16 at an odd address (numpy allows unaligned arrays): copied, the same result.
+    mm = grey.astype(np.uint16) * 16
+    raw = np.zeros(mm.nbytes + 1, np.uint8)
+    unaligned = raw[1:].view(np.uint16).reshape(mm.shape)
+    unaligned[...] = mm
+    assert not unaligned.flags.aligned
+    assert detector.detect(unaligned, **KINECT) == detector.detect(mm, **KINECT)
     frame = agex.Frame(grey, **KINECT, depth_scale=BONN_SCALE)
     assert detector.detect(frame) == expected
     np.testing.assert_array_equal(frame.points[..., 2], frame.depth)

@@ -6,6 +6,8 @@
 #include <agex/io/input_file.h>
 
 #include <algorithm>
+#include <cstdint>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -106,6 +108,19 @@ mpiParts (const std::string &out)
   }
   std::sort (parts.begin (), parts.end ());
   return parts;
+}
+
+/** A digest of the frames' names in order (FNV-1a), for the ranks to check they list the same. */
+std::string
+framesDigest (const std::vector<FrameJob> &jobs)
+{
+  std::uint64_t h = 1469598103934665603ull;
+  for (const auto &job : jobs)
+    for (const char c : job.name + '\n')
+      h = (h ^ static_cast<unsigned char> (c)) * 1099511628211ull;
+  char text[17];
+  std::snprintf (text, sizeof text, "%016llx", static_cast<unsigned long long> (h));
+  return text;
 }
 
 std::string
@@ -311,7 +326,7 @@ runDetectionBatch (const std::vector<FrameJob> &jobs, const std::string &json_pa
       for (const auto &part : mpiParts (json_path))
         for (const auto &line : readResultLines (part, app))
           in_parts.insert (line.frame);
-      status = "1";
+      status = "1" + framesDigest (jobs);
       for (const auto &job : jobs)
         status += out->contains (job.name) || in_parts.count (job.name) ? '1' : '0';
     }
@@ -330,12 +345,18 @@ runDetectionBatch (const std::vector<FrameJob> &jobs, const std::string &json_pa
 
   // 2. Every rank does the frames of its share into its own part.
   const auto [first, last] = shardRange (jobs.size (), rank, size);
+  constexpr std::size_t kMask = 1 + 16;  // where the done flags start, after "1" and the digest
   std::string error;
   try
   {
+    if (status.compare (1, 16, framesDigest (jobs)) != 0 || status.size () != kMask + jobs.size ())
+      throw std::runtime_error ("this rank lists other frames than rank 0 (" + std::to_string (jobs.size ()) +
+                                " here, " + std::to_string (status.size () - std::min (status.size (), kMask)) +
+                                " there): the inputs must be the same files for every rank, on a file system "
+                                "they all see");
     std::vector<FrameJob> todo;
     for (std::size_t i = first; i < last; ++i)
-      if (status[1 + i] == '0')
+      if (status[kMask + i] == '0')
         todo.push_back (jobs[i]);
     ResultsFile part (mpiPart (json_path, rank, size), app);
     runFrameBatch (todo, &part, threads, indexed);

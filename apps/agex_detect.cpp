@@ -1,13 +1,18 @@
 // agex_detect: heads, hands and feet in depth frames.
 //   agex_detect INPUT... [--model MODEL] [--detector-mode agex|forest] [--forest PATH] [--json FILE]
-//               [--overlay FILE.png] [--parts-overlay FILE.png] [--jobs N]
+//               [--overlay FILE.png] [--parts-overlay FILE.png] [--jobs N] [--shard K/N]
+//   agex_detect --merge PART... --json FILE
+//   agex_detect --device openni2[:URI]|replay:PATH [--fps F] [--json FILE]
 // INPUT is a frame file, a directory of frames or an agex dataset. One frame: a JSON
 // document. Several: JSON lines, one per frame, written as they finish, in parallel
-// with --jobs; a rerun with the same --json skips the frames already there.
+// with --jobs; a rerun with the same --json skips the frames already there. Under mpirun the
+// ranks share the frames (doc/batch.md); --device processes a camera's frames as they arrive.
 
+#include <agex/apps/batch_runs.h>
 #include <agex/apps/command_line.h>
 #include <agex/apps/detector_flags.h>
 #include <agex/apps/frame_jobs.h>
+#include <agex/apps/live_runs.h>
 #include <agex/apps/output.h>
 #include <agex/apps/output_guard.h>
 #include <agex/apps/pipeline_flags.h>
@@ -34,6 +39,9 @@ main (int argc, char **argv)
   std::string json_path, overlay_path, parts_overlay_path;
   int jobs = 1;
   float min_confidence = 0.5f;
+  std::string shard, device;
+  std::vector<std::string> merge_parts;
+  double fps = 30.0;
 
   po::options_description general ("agex_detect INPUT... [options]\n"
                                     "Heads, hands and feet in depth frames (.pcd, .png, .u16, directories, datasets)");
@@ -47,21 +55,34 @@ main (int argc, char **argv)
          throw std::runtime_error ("--min-confidence must lie in [0, 1]");
      }),
      "detections drawn on the overlay and printed")
-    ("jobs", po::value (&jobs)->default_value (jobs), "frames processed in parallel");
+    ("jobs", po::value (&jobs)->default_value (jobs), "frames processed in parallel")
+    ("shard", po::value (&shard), "K/N: only the K-th (0-based) of N equal parts of the frames, for job arrays")
+    ("merge", po::value (&merge_parts)->multitoken (), "join the --json parts of --shard runs into --json, in input order")
+    ("device", po::value (&device), "openni2, openni2:URI or replay:PATH: process a live source's frames as they arrive")
+    ("fps", po::value (&fps)->default_value (fps), "frames per second of --device replay:PATH");
   po::options_description all;
   all.add (general).add (agex::apps::detectorOptionsDescription (choice, AGEX_BUNDLED_MODEL))
      .add (agex::apps::frameOptionsDescription (frame_options));
   po::positional_options_description positional;
   positional.add ("input", -1);
 
+  std::unique_ptr<agex::apps::ProcessGroup> group;  // MPI, when run by mpirun: to the end of main
   try
   {
+    group = agex::apps::joinProcessGroup (argc, argv);
     if (!agex::apps::parseCommandLine (argc, argv, all, positional))
       return 0;
-    if (inputs.empty ())
+    if (!merge_parts.empty () && !inputs.empty ())
+      throw std::runtime_error ("--merge takes the parts, and no INPUT");
+    if (!merge_parts.empty ())
+      return agex::apps::mergeResultParts (merge_parts, json_path, "agex_detect"), 0;
+    if (!device.empty () && !inputs.empty ())
+      throw std::runtime_error ("--device is the input: give no INPUT with it");
+    if (inputs.empty () && device.empty ())
       throw std::runtime_error ("no INPUT given (see --help)");
     if (jobs < 1)
       throw std::runtime_error ("--jobs must be at least 1");
+    const agex::apps::Shard part = shard.empty () ? agex::apps::Shard () : agex::apps::parseShard (shard);
     const agex::apps::LoadedDetector loaded = agex::apps::loadDetector (choice);
     if (!parts_overlay_path.empty () && !loaded.forest)
       throw std::runtime_error ("--parts-overlay needs --forest");
@@ -81,9 +102,10 @@ main (int argc, char **argv)
         agex::apps::checkOutputPath (png, Kind::Png, read);
     }
 
-    auto process = [&] (const agex::apps::FrameJob &job, cv::Mat *overlay, cv::Mat *parts_overlay) {
+    auto process = [&] (const agex::apps::FrameJob &job, cv::Mat *overlay, cv::Mat *parts_overlay,
+                        const agex::SourceFrame *live = nullptr) {
       const auto start = std::chrono::steady_clock::now ();
-      const agex::Frame frame = agex::loadFrame (job.path, frame_options);
+      const agex::Frame frame = live ? agex::apps::liveFrame (*live) : agex::loadFrame (job.path, frame_options);
       agex::BodyPartDetector<pcl::PointXYZ> detector;
       loaded.configure (detector);
       if (frame.from_depth_image)  // a PCD carries no intrinsics: the detector estimates them
@@ -111,6 +133,13 @@ main (int argc, char **argv)
       return doc;
     };
 
+    if (!device.empty ())
+      return agex::apps::runLiveDetection (device, fps, frame_options, json_path, jobs, "agex_detect",
+                                           [&] (const agex::SourceFrame &f) {
+                                             return process ({f.name, f.path}, nullptr, nullptr, &f);
+                                           });
+    if (single && group->rank () > 0)
+      return 0;  // one frame: rank 0's
     if (single)
     {
       cv::Mat overlay, parts_overlay;
@@ -130,11 +159,8 @@ main (int argc, char **argv)
                     << d["pixel"][0] << ", " << d["pixel"][1] << ")\n";
       return 0;
     }
-    std::unique_ptr<agex::apps::ResultsFile> results;
-    if (!json_path.empty ())
-      results = std::make_unique<agex::apps::ResultsFile> (json_path, "agex_detect");
-    agex::apps::runFrameBatch (job_list, results.get (), jobs,
-                               [&] (const agex::apps::FrameJob &job) { return process (job, nullptr, nullptr); });
+    agex::apps::runDetectionBatch (job_list, json_path, jobs, part, *group, "agex_detect",
+                                   [&] (const agex::apps::FrameJob &job) { return process (job, nullptr, nullptr); });
     return 0;
   }
   catch (const std::exception &e)

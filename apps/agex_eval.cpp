@@ -1,6 +1,8 @@
 // agex_eval: evaluations on labelled agex datasets.
 //   agex_eval coverage --dataset DIR[@SEQ,...] [--k K] [--radius R] [--keyframes] [--json FILE] [--plot FILE.png]
 //   agex_eval detect --dataset DIR[@SEQ,...] [--model M] [--detector-mode agex|forest --forest F] [--json FILE]
+//                    [--shard K/N]    (or under mpirun -n N: the ranks share the frames)
+//   agex_eval detect --merge PART.json... --json FILE
 //   agex_eval compare --dataset DIR[@SEQ,...] [--model-agex M] [--model-sw M] [--json FILE] [--plots DIR]
 //   agex_eval parts --dataset DIR[@SEQ,...] --forest F [--json FILE] [--overlay-dir DIR]
 // coverage: how often each labelled body part is among the first k AGEX points.
@@ -8,6 +10,7 @@
 // compare: the AGEX detector against the sliding-window baseline (the paper's Fig. 7).
 // parts: per-pixel accuracy of a body-part forest.
 
+#include <agex/apps/batch_runs.h>
 #include <agex/apps/command_line.h>
 #include <agex/apps/evaluation_runs.h>
 #include <agex/apps/forest_flags.h>
@@ -34,6 +37,8 @@ main (int argc, char **argv)
   agex::SlidingWindowParams window_override{0, {}};
   int k = 5;
   bool keyframes = false, details = false;
+  std::string shard;
+  std::vector<std::string> merge_parts;
 
   po::options_description general ("agex_eval coverage|detect|compare|parts --dataset DIR[@SEQ,...] [options]\n"
                                     "Evaluates AGEX coverage, body-part detection or a forest's part labels on a\n"
@@ -57,7 +62,9 @@ main (int argc, char **argv)
     ("window-stride", po::value (&window_override.stride),
      "compare: pixels between window centres (default: the sliding-window model's)")
     ("window-scales", po::value (&window_override.scales)->multitoken (),
-     "compare: window extents over the trained extent (default: the sliding-window model's)");
+     "compare: window extents over the trained extent (default: the sliding-window model's)")
+    ("shard", po::value (&shard), "detect: only the K-th (0-based) of N equal parts of the frames (K/N), for job arrays")
+    ("merge", po::value (&merge_parts)->multitoken (), "detect: reduce the --json reports of every --shard run into --json");
   // The pipeline's own --k (points per mesh) would make --k ambiguous: coverage sets it.
   po::options_description pipeline ("Pipeline (coverage)");
   const po::options_description pipeline_all = agex::apps::pipelineOptionsDescription (params, vector_flags);
@@ -70,10 +77,16 @@ main (int argc, char **argv)
   po::positional_options_description positional;
   positional.add ("mode", 1);
 
+  std::unique_ptr<agex::apps::ProcessGroup> group;  // MPI, when run by mpirun: to the end of main
   try
   {
+    group = agex::apps::joinProcessGroup (argc, argv);
     if (!agex::apps::parseCommandLine (argc, argv, all, positional))
       return 0;
+    if ((group->distributed () || !shard.empty () || !merge_parts.empty ()) && mode != "detect")
+      throw std::runtime_error ("only agex_eval detect shares its frames (mpirun, --shard, --merge)");
+    if (!merge_parts.empty ())
+      return agex::apps::mergeDetectionEvaluations (merge_parts, json_path, plots_dir);
     agex::apps::finishPipelineOptions (vector_flags, params);
     weak.validate ();
     if (dataset_dir.empty ())
@@ -107,7 +120,8 @@ main (int argc, char **argv)
     const agex::apps::LoadedDetector loaded = agex::apps::loadDetector (choice);
     if (mode == "parts")
       return agex::apps::evaluatePartLabels (selection, loaded, weak, json_path, overlay_dir);
-    return agex::apps::evaluateDetection (selection, loaded, radius, json_path, plots_dir);
+    return agex::apps::evaluateDetection (selection, loaded, radius, json_path, plots_dir, *group,
+                                          shard.empty () ? agex::apps::Shard () : agex::apps::parseShard (shard));
   }
   catch (const std::exception &e)
   {

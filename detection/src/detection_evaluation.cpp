@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <stdexcept>
 
 namespace agex
 {
@@ -261,5 +263,171 @@ CandidateCoverage::report () const
   doc["radius_m"] = radius_;
   return doc;
 }
-}  // namespace agex
+// --- state, for evaluations run apart and merged --------------------------------------
+namespace
+{
+constexpr const char *kEvaluationFormat = "agex-detection-evaluation-state";
+constexpr const char *kCoverageFormat = "agex-candidate-coverage-state";
+// A state holds a few numbers per detection and label; this bounds what a damaged or hostile
+// file can make us allocate (a million frames of a dozen detections each).
+constexpr std::size_t kMaxStateEntries = std::size_t (1) << 24;
 
+/** Reads state fields, naming source and the key on any problem. */
+class StateReader
+{
+public:
+  StateReader (const nlohmann::json &doc, const std::string &source, const char *format)
+    : doc_ (doc), source_ (source)
+  {
+    if (!doc.is_object ())
+      fail ("", "is not a JSON object");
+    if (!doc.contains ("format") || doc["format"] != format)
+      fail ("format", std::string ("must be \"") + format + "\"");
+    if (!doc.contains ("version") || doc["version"] != 1)
+      fail ("version", "must be 1");
+  }
+  [[noreturn]] void fail (const std::string &key, const std::string &problem) const
+  {
+    throw std::invalid_argument (source_ + ": evaluation state" + (key.empty () ? "" : " " + key) + " " + problem);
+  }
+  const nlohmann::json &at (const std::string &key) const
+  {
+    if (!doc_.contains (key))
+      fail (key, "is missing");
+    return doc_[key];
+  }
+  double number (const nlohmann::json &v, const std::string &key, double lo, double hi) const
+  {
+    if (!v.is_number () || !std::isfinite (v.get<double> ()) || v.get<double> () < lo || v.get<double> () > hi)
+      fail (key, "must be a number in [" + nlohmann::json (lo).dump () + ", " + nlohmann::json (hi).dump () + "]");
+    return v.get<double> ();
+  }
+  long long integer (const nlohmann::json &v, const std::string &key, long long lo, long long hi) const
+  {
+    if (!v.is_number_integer () || v.get<long long> () < lo || v.get<long long> () > hi)
+      fail (key, "must be an integer in [" + std::to_string (lo) + ", " + std::to_string (hi) + "]");
+    return v.get<long long> ();
+  }
+  const nlohmann::json &array (const nlohmann::json &v, const std::string &key, std::size_t size = 0) const
+  {
+    if (!v.is_array () || v.size () > kMaxStateEntries || (size > 0 && v.size () != size))
+      fail (key, size > 0 ? "must be an array of " + std::to_string (size) : std::string ("must be an array"));
+    return v;
+  }
+
+private:
+  const nlohmann::json &doc_;
+  std::string source_;
+};
+}  // namespace
+
+nlohmann::json
+DetectionEvaluation::state () const
+{
+  nlohmann::json doc = {{"format", kEvaluationFormat}, {"version", 1}, {"radius", radius_}, {"min_iou", min_iou_},
+                        {"focal", focal_}, {"frames", frames_}};
+  doc["positives"] = positives_;
+  for (int c = 0; c < kBodyPartCount; ++c)
+  {
+    nlohmann::json scored = nlohmann::json::array ();
+    for (const auto &s : scored_[c])
+      scored.push_back ({s.confidence, s.correct ? 1 : 0});
+    doc["scored"].push_back (scored);
+    doc["orientation_errors"].push_back (orientation_errors_[c]);
+  }
+  doc["pairs"] = nlohmann::json::array ();
+  for (const auto &p : pairs_)
+    doc["pairs"].push_back ({p.truth, p.predicted, p.confidence});
+  return doc;
+}
+
+DetectionEvaluation
+DetectionEvaluation::fromState (const nlohmann::json &doc, const std::string &source)
+{
+  const StateReader r (doc, source, kEvaluationFormat);
+  DetectionEvaluation e (static_cast<float> (r.number (r.at ("radius"), "radius", 0.0, 1e3)));
+  e.min_iou_ = static_cast<float> (r.number (r.at ("min_iou"), "min_iou", 0.0, 1.0));
+  e.focal_ = static_cast<float> (r.number (r.at ("focal"), "focal", 0.0, 1e7));
+  e.frames_ = static_cast<int> (r.integer (r.at ("frames"), "frames", 0, std::numeric_limits<int>::max ()));
+  const auto &positives = r.array (r.at ("positives"), "positives", kBodyPartCount);
+  const auto &scored = r.array (r.at ("scored"), "scored", kBodyPartCount);
+  const auto &errors = r.array (r.at ("orientation_errors"), "orientation_errors", kBodyPartCount);
+  for (int c = 0; c < kBodyPartCount; ++c)
+  {
+    e.positives_[c] = static_cast<int> (r.integer (positives[c], "positives", 0, std::numeric_limits<int>::max ()));
+    for (const auto &s : r.array (scored[c], "scored"))
+    {
+      r.array (s, "scored entry", 2);
+      e.scored_[c].push_back ({static_cast<float> (r.number (s[0], "scored confidence", 0.0, 1.0)),
+                               r.integer (s[1], "scored correct", 0, 1) == 1});
+    }
+    for (const auto &v : r.array (errors[c], "orientation_errors"))
+      e.orientation_errors_[c].push_back (r.number (v, "orientation_errors", 0.0, 180.0));
+  }
+  for (const auto &p : r.array (r.at ("pairs"), "pairs"))
+  {
+    r.array (p, "pairs entry", 3);
+    // Truth 3 is background; predicted -1 a tip no detection reached (confidence -1: none came near).
+    e.pairs_.push_back ({static_cast<int> (r.integer (p[0], "pairs truth", 0, kBodyPartCount)),
+                         static_cast<int> (r.integer (p[1], "pairs predicted", -1, kBodyPartCount - 1)),
+                         static_cast<float> (r.number (p[2], "pairs confidence", -1.0, 1.0))});
+  }
+  return e;
+}
+
+void
+DetectionEvaluation::merge (const DetectionEvaluation &other)
+{
+  if (other.radius_ != radius_ || other.min_iou_ != min_iou_ || other.focal_ != focal_)
+    throw std::invalid_argument ("evaluations with different criteria (radius, IoU, focal length) cannot be merged");
+  frames_ += other.frames_;
+  for (int c = 0; c < kBodyPartCount; ++c)
+  {
+    positives_[c] += other.positives_[c];
+    scored_[c].insert (scored_[c].end (), other.scored_[c].begin (), other.scored_[c].end ());
+    orientation_errors_[c].insert (orientation_errors_[c].end (), other.orientation_errors_[c].begin (),
+                                   other.orientation_errors_[c].end ());
+  }
+  pairs_.insert (pairs_.end (), other.pairs_.begin (), other.pairs_.end ());
+}
+
+nlohmann::json
+CandidateCoverage::state () const
+{
+  nlohmann::json doc = {{"format", kCoverageFormat}, {"version", 1}, {"radius", radius_}};
+  doc["labels"] = labels_;
+  doc["covered"] = covered_;
+  return doc;
+}
+
+CandidateCoverage
+CandidateCoverage::fromState (const nlohmann::json &doc, const std::string &source)
+{
+  const StateReader r (doc, source, kCoverageFormat);
+  CandidateCoverage coverage (static_cast<float> (r.number (r.at ("radius"), "radius", 0.0, 1e3)));
+  const auto &labels = r.array (r.at ("labels"), "labels", kBodyPartCount);
+  const auto &covered = r.array (r.at ("covered"), "covered", kKinds);
+  for (int c = 0; c < kBodyPartCount; ++c)
+    coverage.labels_[c] = static_cast<int> (r.integer (labels[c], "labels", 0, std::numeric_limits<int>::max ()));
+  for (int k = 0; k < kKinds; ++k)
+  {
+    const auto &row = r.array (covered[k], "covered", kBodyPartCount);
+    for (int c = 0; c < kBodyPartCount; ++c)
+      coverage.covered_[k][c] = static_cast<int> (r.integer (row[c], "covered", 0, coverage.labels_[c]));
+  }
+  return coverage;
+}
+
+void
+CandidateCoverage::merge (const CandidateCoverage &other)
+{
+  if (other.radius_ != radius_)
+    throw std::invalid_argument ("candidate coverages with different radii cannot be merged");
+  for (int c = 0; c < kBodyPartCount; ++c)
+  {
+    labels_[c] += other.labels_[c];
+    for (int k = 0; k < kKinds; ++k)
+      covered_[k][c] += other.covered_[k][c];
+  }
+}
+}  // namespace agex

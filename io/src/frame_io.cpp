@@ -142,12 +142,14 @@ void
 depthImageToCloud (const cv::Mat &depth, const CameraIntrinsics &intrinsics, double depth_scale,
                    pcl::PointCloud<pcl::PointXYZ> &cloud)
 {
-  if (depth.empty () || depth.channels () != 1 || (depth.depth () != CV_8U && depth.depth () != CV_16U))
-    throw FrameError ("depth image must be a non-empty single-channel 8 or 16-bit image");
+  const int type = depth.depth ();
+  if (depth.empty () || depth.channels () != 1 || (type != CV_8U && type != CV_16U && type != CV_32F))
+    throw FrameError ("depth image must be a non-empty single-channel 8 or 16-bit or 32-bit float image");
   if (!(depth_scale > 0.0) || !std::isfinite (depth_scale))
     throw FrameError ("depth scale must be a positive number of metres per unit");
-  if (!(intrinsics.fx > 0.0) || !(intrinsics.fy > 0.0))
-    throw FrameError ("focal lengths fx, fy must be positive");
+  if (!(intrinsics.fx > 0.0) || !(intrinsics.fy > 0.0) || !std::isfinite (intrinsics.fx) ||
+      !std::isfinite (intrinsics.fy) || !std::isfinite (intrinsics.cx) || !std::isfinite (intrinsics.cy))
+    throw FrameError ("focal lengths fx, fy must be positive, and fx, fy, cx, cy finite");
 
   cloud.width = static_cast<std::uint32_t> (depth.cols);
   cloud.height = static_cast<std::uint32_t> (depth.rows);
@@ -158,14 +160,17 @@ depthImageToCloud (const cv::Mat &depth, const CameraIntrinsics &intrinsics, dou
   for (int v = 0; v < depth.rows; ++v)
     for (int u = 0; u < depth.cols; ++u)
     {
-      const unsigned raw = depth.depth () == CV_8U ? depth.at<std::uint8_t> (v, u) : depth.at<std::uint16_t> (v, u);
+      // 0 is invalid; so are a float image's NaN, infinite and negative depths.
+      const double raw = type == CV_8U    ? depth.at<std::uint8_t> (v, u)
+                         : type == CV_16U ? depth.at<std::uint16_t> (v, u)
+                                          : static_cast<double> (depth.at<float> (v, u));
       pcl::PointXYZ &p = cloud (u, v);
-      if (raw == 0)
+      const double z = raw * depth_scale;
+      if (!(raw > 0.0) || !std::isfinite (z))
       {
         p.x = p.y = p.z = nan;
         continue;
       }
-      const double z = raw * depth_scale;
       p.x = static_cast<float> ((u - intrinsics.cx) * z * inv_fx);
       p.y = static_cast<float> ((v - intrinsics.cy) * z * inv_fy);
       p.z = static_cast<float> (z);

@@ -243,6 +243,21 @@ mkdir -p in/bad_batch && cp in/truncated.png in/bad_batch/a.png && cp in/truncat
 check "batch whose first frame fails" 1 "truncated or not a PNG" $D in/bad_batch --json out/never.jsonl
 [ ! -e out/never.jsonl ] || { echo "FAILED: a run that wrote no frame left out/never.jsonl" >&2; failures=$((failures + 1)); }
 
+# Runs split over processes, and live sources.
+$D in/batch $SR --shard 0/2 --json out/shard0.jsonl > /dev/null 2>&1
+check "--shard 2/2" 1 "--shard takes K/N, the K-th of N parts with 0 <= K < N" $D in/batch $SR --shard 2/2 --json out/s.jsonl
+check "--shard 1/0x" 1 "--shard takes K/N" $D in/batch $SR --shard 1/0x --json out/s.jsonl
+check "--merge of a frame file" 1 "frame.png: line 1 is not a frame result of agex_detect" $D --merge in/frame.png --json out/merged.jsonl
+check "--merge without the other half" 1 "30 of 60 frames are in no part \\(input positions 30, 31, 32, 33, 34, ...\\)" $D --merge out/shard0.jsonl --json out/merged.jsonl
+[ ! -e out/merged.jsonl ] || { echo "FAILED: a refused merge wrote out/merged.jsonl" >&2; failures=$((failures + 1)); }
+check "--merge onto an input part" 1 "shard0.jsonl: .*(input|read)" $D --merge out/shard0.jsonl --json out/shard0.jsonl
+check "--device openni2:#9 (no such camera)" 1 "(no depth camera|cannot open the depth camera): tried openni2:#9" timeout 20 $D --device "openni2:#9" --json out/live.jsonl
+[ ! -e out/live.jsonl ] || { echo "FAILED: a run without a camera left out/live.jsonl" >&2; failures=$((failures + 1)); }
+check "--device kinect2" 1 "--device takes openni2, openni2:URI .* or replay:PATH" $D --device kinect2
+check "--device replay: of a missing directory" 1 "missing: no such file or directory" $D --device replay:in/missing
+check "--device replay:in/batch --fps 0" 1 "--fps must lie in \\(0, 10000\\]" $D --device replay:in/batch --fps 0
+check "agex_eval coverage under --shard" 1 "only agex_eval detect shares its frames" $E coverage --dataset in/dataset --shard 0/2
+
 # Parsers that would recurse without bound, and inputs that would block.
 cp "$SRC/test/fuzz/regressions/model/nested_100000_deep_overflows_opencv_stack.yml" in/nested_model.yml
 mkdir -p fifo && mkfifo fifo/frame.u16

@@ -731,7 +731,9 @@ TEST (FrameIo, DepthImageToCloudRejectsBadInput)
   Cloud cloud;
   const cv::Mat depth (4, 4, CV_16UC1, cv::Scalar (1000));
   EXPECT_THROW (agex::depthImageToCloud (cv::Mat (), agex::CameraIntrinsics (), 0.001, cloud), agex::FrameError);
-  EXPECT_THROW (agex::depthImageToCloud (cv::Mat (4, 4, CV_32FC1), agex::CameraIntrinsics (), 0.001, cloud),
+  EXPECT_THROW (agex::depthImageToCloud (cv::Mat (4, 4, CV_64FC1), agex::CameraIntrinsics (), 0.001, cloud),
+                agex::FrameError);
+  EXPECT_THROW (agex::depthImageToCloud (cv::Mat (4, 4, CV_16UC2), agex::CameraIntrinsics (), 0.001, cloud),
                 agex::FrameError);
   EXPECT_THROW (agex::depthImageToCloud (depth, agex::CameraIntrinsics (), 0.0, cloud), agex::FrameError);
   EXPECT_THROW (agex::depthImageToCloud (depth, agex::CameraIntrinsics (), std::nan (""), cloud), agex::FrameError);
@@ -741,6 +743,41 @@ TEST (FrameIo, DepthImageToCloudRejectsBadInput)
   agex::depthImageToCloud (depth, agex::CameraIntrinsics (), 0.001, cloud);
   EXPECT_EQ (cloud.size (), 16u);
   EXPECT_FLOAT_EQ (cloud (2, 2).z, 1.f);
+}
+
+TEST (FrameIo, FloatDepthImagesInMetresWithTheirInvalidValues)
+{
+  // A float image (metres, as numpy users hand it over), read through a row step wider than
+  // the row: the left 4 x 3 of a 6 x 3 image, no copy; what lies right of it is never read.
+  cv::Mat wide (3, 6, CV_32FC1, cv::Scalar (2.f));
+  wide.at<float> (0, 1) = 0.f;
+  wide.at<float> (1, 1) = -1.f;
+  wide.at<float> (1, 2) = std::numeric_limits<float>::quiet_NaN ();
+  wide.at<float> (2, 2) = std::numeric_limits<float>::infinity ();
+  wide.at<float> (2, 4) = 7.f;
+  const cv::Mat depth = wide (cv::Rect (0, 0, 4, 3));
+  ASSERT_FALSE (depth.isContinuous ());
+  agex::CameraIntrinsics k;
+  k.fx = 100.0;
+  k.fy = 200.0;
+  k.cx = 1.0;
+  k.cy = 1.0;
+  Cloud cloud;
+  agex::depthImageToCloud (depth, k, 1.0, cloud);
+  ASSERT_EQ (cloud.width, 4u);
+  ASSERT_EQ (cloud.height, 3u);
+  EXPECT_FLOAT_EQ (cloud (3, 2).z, 2.f);
+  EXPECT_FLOAT_EQ (cloud (3, 2).x, 2.f * 2.f / 100.f);
+  EXPECT_FLOAT_EQ (cloud (3, 2).y, 1.f * 2.f / 200.f);
+  EXPECT_FLOAT_EQ (cloud (0, 0).z, 2.f);
+  for (const auto &[u, v] : std::vector<std::pair<int, int>>{{1, 0}, {1, 1}, {2, 1}, {2, 2}})
+    EXPECT_TRUE (std::isnan (cloud (u, v).z)) << u << "," << v;
+  // Millimetres as floats, with their scale.
+  agex::depthImageToCloud (cv::Mat (2, 2, CV_32FC1, cv::Scalar (1500.f)), k, 0.001, cloud);
+  EXPECT_FLOAT_EQ (cloud (1, 1).z, 1.5f);
+  agex::CameraIntrinsics nan_cx = k;
+  nan_cx.cx = std::nan ("");
+  EXPECT_THROW (agex::depthImageToCloud (depth, nan_cx, 1.0, cloud), agex::FrameError);
 }
 
 // ---------------------------------------------------------------------------

@@ -1,6 +1,7 @@
 #include <agex/apps/evaluation_runs.h>
 
 #include <agex/apps/command_line.h>
+#include <agex/apps/output_guard.h>
 #include <agex/apps/output.h>
 #include <agex/common/statistics.h>
 #include <agex/detection/coverage_evaluation.h>
@@ -13,7 +14,9 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <iostream>
+#include <map>
 
 namespace agex
 {
@@ -150,19 +153,48 @@ evaluateCoverage (const DatasetSelection &selection, agex::DepthPipelineParams p
   }
   return 0;
 }
-int
-evaluateDetection (const DatasetSelection &selection, const LoadedDetector &loaded,
-                   float radius, const std::string &json_path, const std::string &plots_dir)
+namespace
+{
+/** What agex_eval detect gathered over some frames, mergeable with another share's. */
+struct DetectionTally
+{
+  explicit DetectionTally (float radius) : evaluation (radius), candidates (radius) {}
+  agex::DetectionEvaluation evaluation;
+  agex::CandidateCoverage candidates;
+  std::vector<double> frame_ms;
+
+  nlohmann::json state () const
+  {
+    return {{"evaluation", evaluation.state ()}, {"candidates", candidates.state ()}, {"frame_ms", frame_ms}};
+  }
+  /** \throws std::invalid_argument naming source on a malformed state */
+  void merge (const nlohmann::json &state, const std::string &source)
+  {
+    if (!state.is_object () || !state.contains ("evaluation") || !state.contains ("candidates") ||
+        !state.contains ("frame_ms") || !state["frame_ms"].is_array ())
+      throw std::invalid_argument (source + ": \"state\" must hold evaluation, candidates and frame_ms");
+    evaluation.merge (agex::DetectionEvaluation::fromState (state["evaluation"], source));
+    candidates.merge (agex::CandidateCoverage::fromState (state["candidates"], source));
+    for (const auto &ms : state["frame_ms"])
+    {
+      if (!ms.is_number () || !std::isfinite (ms.get<double> ()) || ms.get<double> () < 0.0)
+        throw std::invalid_argument (source + ": state frame_ms must hold non-negative numbers");
+      frame_ms.push_back (ms.get<double> ());
+    }
+  }
+};
+
+/** The frames [first, last) of the selection through the detector. */
+void
+tallyDetection (const DatasetSelection &selection, const LoadedDetector &loaded, std::size_t first, std::size_t last,
+                DetectionTally &tally)
 {
   agex::BodyPartDetector<pcl::PointXYZ> detector;
   loaded.configure (detector);
   const auto &intr = selection.dataset.info ().intrinsics;
   detector.setFocalLength (static_cast<float> (intr.fx), static_cast<float> (intr.fy));
-  agex::DetectionEvaluation evaluation (radius);
-  agex::CandidateCoverage candidates (radius);
-  Progress progress ("evaluated", selection.frame_ids.size ());
-  std::vector<double> frame_ms;
-  for (std::size_t i = 0; i < selection.frame_ids.size (); ++i)
+  Progress progress ("evaluated", last - first);
+  for (std::size_t i = first; i < last; ++i)
   {
     const auto &id = selection.frame_ids[i];
     const auto cloud = selection.dataset.loadFrame (id);
@@ -170,24 +202,29 @@ evaluateDetection (const DatasetSelection &selection, const LoadedDetector &load
     detector.setInputCloud (cloud);
     std::vector<agex::BodyPartDetection> detections;
     detector.compute (detections);
-    frame_ms.push_back (agex::msSince (start));
-    evaluation.addFrame (detections, selection.dataset.labelsOf (id));
-    candidates.addFrame (detector.getIntermediate ().interest_points, detector.getCandidates (),
-                         selection.dataset.labelsOf (id));
-    progress.step (i + 1);
+    tally.frame_ms.push_back (agex::msSince (start));
+    tally.evaluation.addFrame (detections, selection.dataset.labelsOf (id));
+    tally.candidates.addFrame (detector.getIntermediate ().interest_points, detector.getCandidates (),
+                               selection.dataset.labelsOf (id));
+    progress.step (i + 1 - first);
   }
+}
+
+/** The report of a tally: JSON (with what names the run, `about`), the printed figures, the plot. */
+int
+reportDetection (const DetectionTally &tally, const nlohmann::json &about, const std::string &json_path,
+                 const std::string &plots_dir, const nlohmann::json &extra = nlohmann::json::object ())
+{
   constexpr float kConfusionThreshold = 0.75f;
+  const agex::DetectionEvaluation &evaluation = tally.evaluation;
   nlohmann::json doc = evaluation.report (kConfusionThreshold);
-  doc["dataset"] = selection.dataset.directory ();
-  doc["model"] = loaded.files.front ();
-  doc["detector_mode"] = loaded.mode_name;
-  if (loaded.files.size () > 1)
-    doc["forest"] = loaded.files.back ();
-  doc["ms_per_frame_median"] = medianMs (frame_ms);
-  doc["candidate_coverage"] = candidates.report ();
+  doc.update (about);
+  doc["ms_per_frame_median"] = medianMs (tally.frame_ms);
+  doc["candidate_coverage"] = tally.candidates.report ();
+  doc.update (extra);
   if (!json_path.empty ())
     writeJson (json_path, doc);
-  std::cout << selection.dataset.directory () << ": " << selection.frame_ids.size () << " frames\n";
+  std::cout << about["dataset"].get<std::string> () << ": " << evaluation.frames () << " frames\n";
   for (int c = 0; c < agex::kBodyPartCount; ++c)
   {
     const auto part = static_cast<agex::BodyPart> (c);
@@ -198,7 +235,7 @@ evaluateDetection (const DatasetSelection &selection, const LoadedDetector &load
   {
     std::filesystem::create_directories (plots_dir);
     Plot plot;
-    plot.title = "Body-part detection: precision against recall (" + std::to_string (selection.frame_ids.size ()) +
+    plot.title = "Body-part detection: precision against recall (" + std::to_string (evaluation.frames ()) +
                  " frames)";
     plot.x_label = "recall";
     plot.y_label = "precision";
@@ -209,6 +246,127 @@ evaluateDetection (const DatasetSelection &selection, const LoadedDetector &load
                           renderPlot (plot));
   }
   return 0;
+}
+
+/** The keys of a detect report that say what was evaluated how: equal in every share. */
+const char *const kRunKeys[] = {"dataset", "model", "detector_mode", "forest", "radius_m", "min_iou"};
+}  // namespace
+
+int
+evaluateDetection (const DatasetSelection &selection, const LoadedDetector &loaded, float radius,
+                   const std::string &json_path, const std::string &plots_dir, ProcessGroup &group, const Shard &shard)
+{
+  nlohmann::json about = {{"dataset", selection.dataset.directory ()}, {"model", loaded.files.front ()},
+                          {"detector_mode", loaded.mode_name}};
+  if (loaded.files.size () > 1)
+    about["forest"] = loaded.files.back ();
+  const std::size_t frames = selection.frame_ids.size ();
+  DetectionTally tally (radius);
+  if (!group.distributed ())
+  {
+    if (!shard.given)
+    {
+      tallyDetection (selection, loaded, 0, frames, tally);
+      return reportDetection (tally, about, json_path, plots_dir);
+    }
+    if (json_path.empty ())
+      throw std::runtime_error ("--shard needs --json: the part's report holds the state that --merge joins");
+    const auto [first, last] = shardRange (frames, shard.index, shard.count);
+    tallyDetection (selection, loaded, first, last, tally);
+    const nlohmann::json extra = {
+        {"shard", {{"index", shard.index}, {"count", shard.count}, {"first_frame", first}, {"dataset_frames", frames}}},
+        {"state", tally.state ()}};
+    return reportDetection (tally, about, json_path, plots_dir, extra);
+  }
+  if (shard.given)
+    throw std::runtime_error ("--shard and mpirun both split the frames; use one of them");
+  // Under mpirun: each rank its share, rank 0 merges the states in rank order (= frame order).
+  const auto [first, last] = shardRange (frames, group.rank (), group.size ());
+  std::string mine;
+  try
+  {
+    tallyDetection (selection, loaded, first, last, tally);
+    mine = "1" + tally.state ().dump ();
+  }
+  catch (const std::exception &e)
+  {
+    mine = std::string ("0") + e.what ();
+  }
+  const std::vector<std::string> all = group.gather (mine);
+  if (mine[0] != '1')
+    throw std::runtime_error ("rank " + std::to_string (group.rank ()) + ": " + mine.substr (1));
+  if (group.rank () > 0)
+    return 0;
+  DetectionTally merged (radius);
+  for (std::size_t r = 0; r < all.size (); ++r)
+  {
+    if (all[r][0] != '1')
+      throw std::runtime_error ("rank " + std::to_string (r) + " failed (see its message); no report written");
+    merged.merge (nlohmann::json::parse (all[r].substr (1)), "rank " + std::to_string (r));
+  }
+  return reportDetection (merged, about, json_path, plots_dir);
+}
+
+int
+mergeDetectionEvaluations (const std::vector<std::string> &parts, const std::string &json_path,
+                           const std::string &plots_dir)
+{
+  if (json_path.empty ())
+    throw std::runtime_error ("--merge needs --json OUT, the report to write");
+  std::map<int, std::pair<std::string, nlohmann::json>> by_index;
+  int count = -1;
+  nlohmann::json about;
+  float radius = 0.f;
+  for (const auto &path : parts)
+  {
+    std::ifstream in (path, std::ios::binary);
+    if (!in)
+      throw std::runtime_error (path + ": cannot be read");
+    constexpr int kMaxDepth = 64;
+    nlohmann::json doc = nlohmann::json::parse (
+        in, [] (int depth, nlohmann::json::parse_event_t, nlohmann::json &) { return depth <= kMaxDepth; }, false);
+    if (!doc.is_object () || !doc.contains ("shard") || !doc.contains ("state") || !doc["shard"].is_object () ||
+        !doc["shard"].contains ("index") || !doc["shard"].contains ("count") ||
+        !doc["shard"]["index"].is_number_integer () || !doc["shard"]["count"].is_number_integer ())
+      throw std::runtime_error (path + ": not the report of an agex_eval detect --shard run (no \"shard\" and \"state\")");
+    const int index = doc["shard"]["index"].get<int> (), n = doc["shard"]["count"].get<int> ();
+    nlohmann::json run;
+    for (const char *key : kRunKeys)
+      if (doc.contains (key))
+        run[key] = doc[key];
+    if (count < 0)
+    {
+      count = n;
+      about = run;
+      radius = doc.contains ("radius_m") && doc["radius_m"].is_number () ? doc["radius_m"].get<float> () : 0.f;
+    }
+    else if (n != count || run != about)
+      throw std::runtime_error (path + ": a shard of another run (shard count, dataset, model, mode or radius differ "
+                                       "from " + by_index.begin ()->second.first + "'s)");
+    if (index < 0 || index >= n)
+      throw std::runtime_error (path + ": shard " + std::to_string (index) + " of " + std::to_string (n) + "?");
+    if (!by_index.emplace (index, std::make_pair (path, std::move (doc["state"]))).second)
+      throw std::runtime_error (path + ": shard " + std::to_string (index) + " is given twice (also " +
+                                by_index[index].first + ")");
+  }
+  if (parts.empty ())
+    throw std::runtime_error ("--merge needs the reports of the --shard runs");
+  if (static_cast<int> (by_index.size ()) != count)
+  {
+    std::string missing;
+    for (int k = 0; k < count; ++k)
+      if (!by_index.count (k))
+        missing += (missing.empty () ? "" : ", ") + std::to_string (k);
+    throw std::runtime_error ("shard(s) " + missing + " of " + std::to_string (count) + " missing; merge them all");
+  }
+  InputFiles read (parts);
+  checkOutputPath (json_path, OutputKind::Json, read);
+  DetectionTally tally (radius);
+  for (const auto &[index, part] : by_index)
+    tally.merge (part.second, part.first);
+  const std::string dataset = about.contains ("dataset") && about["dataset"].is_string () ? about["dataset"].get<std::string> () : "";
+  about["dataset"] = dataset;
+  return reportDetection (tally, about, json_path, plots_dir);
 }
 
 int

@@ -48,6 +48,18 @@ public:
   int frames () const { return frames_; }
   nlohmann::json report (float confusion_threshold) const;
 
+  /** \brief Everything the evaluation holds (its criterion and what each frame added), so
+    * that evaluations of disjoint frames, run apart (MPI ranks, --shard runs), can be
+    * merged: fromState (state ()) is this evaluation again. */
+  nlohmann::json state () const;
+  /** \brief The evaluation a state () wrote.
+    * \throws std::invalid_argument naming source and what is missing, mistyped or out of range */
+  static DetectionEvaluation fromState (const nlohmann::json &state, const std::string &source);
+  /** \brief Adds other's frames after this one's: the result is the evaluation of this one's
+    * frames followed by other's, added in that order, whatever the split.
+    * \throws std::invalid_argument if the two do not use the same criterion */
+  void merge (const DetectionEvaluation &other);
+
 private:
   /** How well d fits l under the criterion (larger is better); negative: no match. */
   float matchQuality (const BodyPartDetection &d, const PartLabel &l) const;
@@ -88,6 +100,12 @@ public:
                  const std::vector<PartLabel> &labels);
   /** {"agex5": {"head": f, ...}, "agex_all": ..., "modes": ..., "union": ..., "labels": {...}} */
   nlohmann::json report () const;
+  /** Its counts, for merging (as DetectionEvaluation::state). */
+  nlohmann::json state () const;
+  /** \throws std::invalid_argument naming source and what is malformed */
+  static CandidateCoverage fromState (const nlohmann::json &state, const std::string &source);
+  /** \brief Adds other's counts. \throws std::invalid_argument if the radii differ */
+  void merge (const CandidateCoverage &other);
 
 private:
   static constexpr int kKinds = 4;

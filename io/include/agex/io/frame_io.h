@@ -76,8 +76,11 @@ struct Frame
 /** Default metres-per-unit for a depth image of the given OpenCV depth (CV_8U, CV_16U). */
 double defaultDepthScale (int cv_depth);
 
-/** \brief Back-projects a single-channel CV_8U or CV_16U depth image; 0 is invalid.
-  * \throws FrameError on an unsupported image type */
+/** \brief Back-projects a single-channel CV_8U, CV_16U or CV_32F depth image (depth =
+  * value x depth_scale metres); 0 is invalid, and so are a float image's NaN, infinite and
+  * negative values. Any row step is read as it is (no copy of the image).
+  * \throws FrameError on an unsupported image type, a depth scale that is not positive, focal
+  *         lengths that are not positive or intrinsics that are not finite */
 void
 depthImageToCloud (const cv::Mat &depth, const CameraIntrinsics &intrinsics,
                    double depth_scale, pcl::PointCloud<pcl::PointXYZ> &cloud);

@@ -99,6 +99,7 @@ annotateMasks (int argc, char **argv)
   AnnotateOutput output;
   std::string images_dir, masks_dir, excluded;
   std::vector<std::string> only, skip;
+  bool overlay_on_mask = false;
   agex::apps::MaskAnnotationOptions mask_options;
   po::options_description options ("agex_annotate masks --images DIR --masks DIR --out XML [options]\n"
                                    "Contour landmarks from mask images: each image's mask is the PNG of the same stem\n"
@@ -110,7 +111,8 @@ annotateMasks (int argc, char **argv)
     ("labels-excluded", po::value (&excluded), "label-map labels that are not the person, e.g. 2,33,56 (bags)")
     ("instances", po::bool_switch (&mask_options.instances), "the masks are instance masks: value k is person k")
     ("only", po::value (&only)->multitoken (), "annotate only these image files (names in the images folder)")
-    ("skip", po::value (&skip)->multitoken (), "leave these image files out (held-out test images)");
+    ("skip", po::value (&skip)->multitoken (), "leave these image files out (held-out test images)")
+    ("overlay-on-mask", po::bool_switch (&overlay_on_mask), "draw the overlays on the mask's silhouette, not the photo");
   if (!agex::apps::parseCommandLine (argc, argv, options, {}))
     return 0;
   if (mask_options.instances && !excluded.empty ())
@@ -158,7 +160,8 @@ annotateMasks (int argc, char **argv)
     if (!agex::apps::annotateMaskedImage (pair, pixels.size (), mask_options, summary, entry, drawn))
       continue;
     if (!output.overlay_dir.empty ())
-      agex::apps::writeAnnotationOverlay (output.overlay_dir, name, pixels, drawn, read);
+      agex::apps::writeAnnotationOverlay (output.overlay_dir, name,
+                                          overlay_on_mask ? agex::apps::maskSilhouette (pair.mask, mask_options.excluded_labels) : pixels, drawn, read);
     dataset.images.push_back (std::move (entry));
   }
   if (dataset.images.empty ())

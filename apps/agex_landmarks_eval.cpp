@@ -10,6 +10,7 @@
 
 #include <iostream>
 #include <memory>
+#include <numeric>
 
 namespace po = boost::program_options;
 
@@ -23,7 +24,7 @@ main (int argc, char **argv)
   agex::apps::DetectorChoice detector_choice;
   agex::apps::EvaluationSettings settings;
   agex::ShapePredictorTrainingParams shape_params;
-  agex::PeopleDetectorTrainingParams detector_params;
+  agex::apps::DetectorTraining detector_training;
   po::options_description general ("agex_landmarks_eval --dataset XML (--model MODEL | --folds K) [options]\n"
                                    "Mean landmark error (px, per box height, per shoulder width), mean distance to the true\n"
                                    "contour (px, per box height), people detection (AP at IoU 0.5, recall, false detections\n"
@@ -42,10 +43,12 @@ main (int argc, char **argv)
      "with --folds: imglab XML files added to every fold's training set, never tested")
     ("train-detector", po::bool_switch (&train_detector), "with --folds: train a detector per fold too")
     ("json", po::value (&json_path), "write the results here")
-    ("overlay-dir", po::value (&settings.overlay_dir), "write a PNG per image with the predicted landmarks here");
+    ("overlay-dir", po::value (&settings.overlay_dir), "write a PNG per image with the predicted landmarks here")
+    ("pasted", po::bool_switch (&settings.pasted),
+     "also score detection on the tested people pasted into each other's photos (several per image, many sizes)");
   po::options_description all;
   all.add (general).add (agex::apps::detectorChoiceOptions (detector_choice));
-  all.add (agex::apps::shapeTrainerOptions (shape_params)).add (agex::apps::detectorTrainerOptions (detector_params));
+  all.add (agex::apps::shapeTrainerOptions (shape_params)).add (agex::apps::detectorTrainerOptions (detector_training));
   try
   {
     if (!agex::apps::parseCommandLine (argc, argv, all, {}))
@@ -54,27 +57,11 @@ main (int argc, char **argv)
       throw std::runtime_error ("give --model MODEL, or --folds K to cross-validate (a model is trained per fold)");
     if (folds == 1 || folds < 0)
       throw std::runtime_error ("--folds needs at least 2 folds");
-    if (folds == 0 && (!extra_paths.empty () || train_detector))
-      throw std::runtime_error ("--train-also and --train-detector need --folds");
-    if (settings.min_detection_height < 0)
-      throw std::runtime_error ("--min-detection-height must be 0 or more");
-    agex::InputFiles read (dataset_paths);
-    for (const auto &path : extra_paths)
-      read.add (path);
-    for (const auto &path : {model_path, detector_choice.path})
-      if (!path.empty ())
-        read.add (path);
-    if (!json_path.empty ())
-      read.checkOutput (json_path);
-    auto images = agex::apps::loadLandmarkDatasets (dataset_paths);
-    const std::size_t tested_images = images.size ();
-    for (auto &image : agex::apps::loadLandmarkDatasets (extra_paths))
-      images.push_back (std::move (image));
-    // No output may land on an image the datasets name either.
-    for (const auto &image : images)
-      read.add (image.path);
-    if (!json_path.empty ())
-      read.checkOutput (json_path);
+    if ((folds == 0 && (!extra_paths.empty () || train_detector)) || settings.min_detection_height < 0)
+      throw std::runtime_error ("--train-also and --train-detector need --folds; --min-detection-height must be 0 or more");
+    const agex::apps::EvaluationInputs inputs =
+      agex::apps::loadEvaluationInputs (dataset_paths, extra_paths, {model_path, detector_choice.path}, json_path);
+    const auto &images = inputs.images;
     std::unique_ptr<agex::PeopleDetector> detector;
     if (!detector_choice.none && !train_detector)
       detector = std::make_unique<agex::PeopleDetector> (agex::apps::loadDetector (detector_choice));
@@ -83,18 +70,17 @@ main (int argc, char **argv)
     if (folds == 0)
     {
       agex::apps::LandmarkEvaluation pooled;
-      std::vector<std::size_t> test (tested_images);
-      for (std::size_t i = 0; i < tested_images; ++i)
-        test[i] = i;
+      std::vector<std::size_t> test (inputs.tested);
+      std::iota (test.begin (), test.end (), 0);
       agex::apps::evaluateImages (images, test, agex::apps::loadContourModel (model_path), detector.get (), settings,
-                                  read, pooled);
+                                  inputs.read, pooled);
       doc = pooled.json ();
       doc["model"] = model_path;
     }
     else
-      doc = agex::apps::crossValidate (images, tested_images, folds, shape_params,
-                                       train_detector && !detector_choice.none ? &detector_params : nullptr,
-                                       detector.get (), settings, read);
+      doc = agex::apps::crossValidate (images, inputs.tested, folds, shape_params,
+                                       train_detector && !detector_choice.none ? &detector_training : nullptr,
+                                       detector.get (), settings, inputs.read);
     doc["dataset"] = dataset_paths;
     doc["detector"] = detector ? detector->description () : train_detector && !detector_choice.none ? "fhog trained per fold" : "none";
     if (!json_path.empty ())

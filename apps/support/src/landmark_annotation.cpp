@@ -392,6 +392,17 @@ readLabelImage (const std::string &path)
   return labels;
 }
 
+cv::Mat
+maskSilhouette (const std::string &mask_path, const std::vector<int> &excluded_labels)
+{
+  const cv::Mat labels = readLabelImage (mask_path);
+  cv::Mat silhouette (labels.size (), CV_8UC1, cv::Scalar (40));
+  silhouette.setTo (170, labels != 0);
+  for (const int label : excluded_labels)
+    silhouette.setTo (95, labels == label);
+  return silhouette;
+}
+
 std::vector<int>
 parseLabelList (const std::string &text, const std::string &flag)
 {

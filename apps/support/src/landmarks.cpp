@@ -225,8 +225,10 @@ shapeTrainerOptions (ShapePredictorTrainingParams &p)
 }
 
 po::options_description
-detectorTrainerOptions (PeopleDetectorTrainingParams &p)
+detectorTrainerOptions (DetectorTraining &training)
 {
+  PeopleDetectorTrainingParams &p = training.params;
+  PastedPeopleParams &q = training.pasted;
   po::options_description options ("People detector training (dlib::structural_object_detection_trainer, fhog)");
   options.add_options ()
     ("detector-c", po::value (&p.c)->default_value (p.c), "SVM C")
@@ -239,7 +241,15 @@ detectorTrainerOptions (PeopleDetectorTrainingParams &p)
     ("detector-train-max-person", po::value (&p.train_max_person_windows)->default_value (p.train_max_person_windows),
      "...and at most (spread over the images; 0, 0: images as they are)")
     ("detector-scale", po::value (&p.scale)->default_value (p.scale), "resize images by this before detection (below 1: faster, misses small people)")
-    ("detector-flips", po::value (&p.add_flips)->default_value (p.add_flips), "add left-right mirrored training images");
+    ("detector-flips", po::value (&p.add_flips)->default_value (p.add_flips), "add left-right mirrored training images")
+    ("detector-paste-people", po::value (&training.paste_people)->default_value (training.paste_people),
+     "train on the people cut out along their outlines and pasted into each other's photos")
+    ("detector-originals", po::value (&training.originals)->default_value (training.originals),
+     "train on the photos as they are")
+    ("detector-paste-per-image", po::value (&q.people_per_image)->default_value (q.people_per_image), "people pasted into each photo")
+    ("detector-paste-min-height", po::value (&q.min_height)->default_value (q.min_height),
+     "pasted people are at least this fraction of the photo's height...")
+    ("detector-paste-max-height", po::value (&q.max_height)->default_value (q.max_height), "...and at most this");
   return options;
 }
 
@@ -265,21 +275,43 @@ trainShapePredictor (const std::vector<AnnotatedImage> &images, const std::vecto
   return ContourShapePredictor::train (training, params);
 }
 
-PeopleDetector
-trainPeopleDetector (const std::vector<AnnotatedImage> &images, const std::vector<std::size_t> &which,
-                     const PeopleDetectorTrainingParams &params, std::size_t *ignored)
+PeopleImages
+pastedPeopleImages (const std::vector<AnnotatedImage> &images, const std::vector<std::size_t> &which,
+                    const PastedPeopleParams &params)
 {
   std::vector<cv::Mat> greys;
-  std::vector<std::vector<cv::Rect>> boxes, ignore_regions;
+  std::vector<std::vector<std::vector<cv::Point2f>>> outlines;
+  std::vector<std::vector<cv::Rect>> ignore_regions;
   for (const std::size_t i : which)
   {
     greys.push_back (images.at (i).grey);
-    boxes.emplace_back ();
+    outlines.emplace_back ();
     for (const AnnotatedPerson &person : images[i].people)
-      boxes.back ().push_back (person.tight_box);
+      outlines.back ().push_back (person.landmarks);
     ignore_regions.push_back (images[i].ignored);
   }
-  return PeopleDetector::train (greys, boxes, ignore_regions, params, ignored);
+  return pastePeople (greys, outlines, ignore_regions, params);
+}
+
+PeopleDetector
+trainPeopleDetector (const std::vector<AnnotatedImage> &images, const std::vector<std::size_t> &which,
+                     const DetectorTraining &training, std::size_t *ignored)
+{
+  if (!training.paste_people && !training.originals)
+    throw std::runtime_error ("the people detector needs training images: the photos, the pasted people or both");
+  PeopleImages set;
+  if (training.paste_people)
+    set = pastedPeopleImages (images, which, training.pasted);
+  if (training.originals)
+    for (const std::size_t i : which)
+    {
+      set.images.push_back (images.at (i).grey);
+      set.boxes.emplace_back ();
+      for (const AnnotatedPerson &person : images[i].people)
+        set.boxes.back ().push_back (person.tight_box);
+      set.ignore.push_back (images[i].ignored);
+    }
+  return PeopleDetector::train (set.images, set.boxes, set.ignore, training.params, ignored);
 }
 
 std::string
@@ -328,8 +360,20 @@ void
 LandmarkEvaluation::add (const AnnotatedImage &image, const ContourShapePredictor &predictor,
                          const PeopleDetector *detector, double threshold)
 {
+  addLandmarks (image, predictor);
+  if (!detector)
+    return;
+  std::vector<cv::Rect> people;
+  for (const AnnotatedPerson &person : image.people)
+    people.push_back (person.tight_box);
+  addDetection (image.grey, people, image.ignored, *detector, threshold);
+}
+
+void
+LandmarkEvaluation::addLandmarks (const AnnotatedImage &image, const ContourShapePredictor &predictor)
+{
   ++images_;
-  auto start = std::chrono::steady_clock::now ();
+  const auto start = std::chrono::steady_clock::now ();
   for (const AnnotatedPerson &person : image.people)
   {
     const std::vector<cv::Point2f> predicted = predictor.predict (image.grey, person.box);
@@ -358,26 +402,45 @@ LandmarkEvaluation::add (const AnnotatedImage &image, const ContourShapePredicto
     sum_contour_box_ += contour / box_height;
   }
   landmark_ms_ += msSince (start);
-  if (!detector)
-    return;
-  ++detect_images_;
-  start = std::chrono::steady_clock::now ();
-  const std::vector<PersonDetection> detections = detector->detect (image.grey, threshold - kApScoreMargin);
-  detect_ms_ += msSince (start);
-  addDetections (image, detections, threshold);
 }
 
 void
-LandmarkEvaluation::addDetections (const AnnotatedImage &image, const std::vector<PersonDetection> &detections,
-                                   double threshold)
+LandmarkEvaluation::addDetection (const cv::Mat &grey, const std::vector<cv::Rect> &people,
+                                  const std::vector<cv::Rect> &ignored, const PeopleDetector &detector, double threshold)
+{
+  detect (detection_, grey, people, ignored, detector, threshold);
+}
+
+void
+LandmarkEvaluation::addPastedDetection (const cv::Mat &grey, const std::vector<cv::Rect> &people,
+                                        const std::vector<cv::Rect> &ignored, const PeopleDetector &detector,
+                                        double threshold)
+{
+  detect (pasted_, grey, people, ignored, detector, threshold);
+}
+
+void
+LandmarkEvaluation::detect (DetectionScores &scores, const cv::Mat &grey, const std::vector<cv::Rect> &people,
+                            const std::vector<cv::Rect> &ignored, const PeopleDetector &detector, double threshold) const
+{
+  ++scores.images;
+  const auto start = std::chrono::steady_clock::now ();
+  const std::vector<PersonDetection> detections = detector.detect (grey, threshold - kApScoreMargin);
+  scores.ms += msSince (start);
+  addDetections (scores, people, ignored, detections, threshold);
+}
+
+void
+LandmarkEvaluation::addDetections (DetectionScores &scores, const std::vector<cv::Rect> &people,
+                                   const std::vector<cv::Rect> &ignore_regions,
+                                   const std::vector<PersonDetection> &detections, double threshold) const
 {
   std::vector<cv::Rect> truths, ignored;
-  for (const AnnotatedPerson &person : image.people)
-    (person.tight_box.height >= min_detection_height_ ? truths : ignored)
-      .push_back (uprightBox (person.tight_box, kMatchAspect));
-  for (const cv::Rect &region : image.ignored)
+  for (const cv::Rect &person : people)
+    (person.height >= min_detection_height_ ? truths : ignored).push_back (uprightBox (person, kMatchAspect));
+  for (const cv::Rect &region : ignore_regions)
     ignored.push_back (region);
-  truths_ += truths.size ();
+  scores.truths += truths.size ();
   // Greedy one-to-one matching, best scores first (detections come sorted by score).
   std::vector<bool> used (truths.size (), false);
   for (const PersonDetection &d : detections)
@@ -398,8 +461,8 @@ LandmarkEvaluation::addDetections (const AnnotatedImage &image, const std::vecto
     if (best >= 0)
     {
       used[best] = true;
-      scored_.emplace_back (d.score, true);
-      found_ += above;
+      scores.scored.emplace_back (d.score, true);
+      scores.found += above;
       continue;
     }
     // On an ignore region (an ignore box, a person too short to count, a box without
@@ -409,8 +472,8 @@ LandmarkEvaluation::addDetections (const AnnotatedImage &image, const std::vecto
     });
     if (on_ignored || d.box.height < min_detection_height_)
       continue;
-    scored_.emplace_back (d.score, false);
-    false_detections_ += above;
+    scores.scored.emplace_back (d.score, false);
+    scores.false_detections += above;
   }
 }
 
@@ -440,31 +503,73 @@ averagePrecision (std::vector<std::pair<double, bool>> scored, std::size_t truth
   return ap;
 }
 
+namespace
+{
+nlohmann::json
+meanOf (double sum, std::size_t n)
+{
+  if (n == 0)
+    return nullptr;
+  return sum / n;
+}
+}  // namespace
+
+nlohmann::json
+LandmarkEvaluation::DetectionScores::json (int min_height) const
+{
+  nlohmann::json doc;
+  doc["detection_people"] = truths;
+  doc["detection_min_height"] = min_height;
+  doc["detection_recall"] = meanOf (static_cast<double> (found), truths);
+  doc["detection_ap"] = truths ? nlohmann::json (averagePrecision (scored, truths)) : nlohmann::json (nullptr);
+  doc["false_detections_per_image"] = meanOf (static_cast<double> (false_detections), images);
+  doc["detection_images"] = images;
+  doc["ms_per_image_detect"] = meanOf (ms, images);
+  return doc;
+}
+
 nlohmann::json
 LandmarkEvaluation::json () const
 {
-  auto mean = [] (double sum, std::size_t n) -> nlohmann::json {
-    if (n == 0)
-      return nullptr;
-    return sum / n;
-  };
-  nlohmann::json doc;
+  nlohmann::json doc = detection_.json (min_detection_height_);
   doc["images"] = images_;
   doc["people"] = people_;
-  doc["mean_error_px"] = mean (sum_error_px_, people_);
-  doc["mean_error_box_height"] = mean (sum_error_box_, people_);
-  doc["mean_error_shoulder_width"] = mean (sum_error_shoulder_, shoulder_people_);
+  doc["mean_error_px"] = meanOf (sum_error_px_, people_);
+  doc["mean_error_box_height"] = meanOf (sum_error_box_, people_);
+  doc["mean_error_shoulder_width"] = meanOf (sum_error_shoulder_, shoulder_people_);
   doc["people_with_shoulders"] = shoulder_people_;
-  doc["mean_contour_distance_px"] = mean (sum_contour_, people_);
-  doc["mean_contour_distance_box_height"] = mean (sum_contour_box_, people_);
-  doc["detection_people"] = truths_;
-  doc["detection_min_height"] = min_detection_height_;
-  doc["detection_recall"] = mean (static_cast<double> (found_), truths_);
-  doc["detection_ap"] = truths_ ? nlohmann::json (averagePrecision (scored_, truths_)) : nlohmann::json (nullptr);
-  doc["false_detections_per_image"] = mean (static_cast<double> (false_detections_), detect_images_);
-  doc["ms_per_image"] = {{"detect", mean (detect_ms_, detect_images_)}, {"landmarks", mean (landmark_ms_, images_)}};
-  doc["ms_per_person_landmarks"] = mean (landmark_ms_, people_);
+  doc["mean_contour_distance_px"] = meanOf (sum_contour_, people_);
+  doc["mean_contour_distance_box_height"] = meanOf (sum_contour_box_, people_);
+  doc["ms_per_image"] = {{"detect", meanOf (detection_.ms, detection_.images)}, {"landmarks", meanOf (landmark_ms_, images_)}};
+  doc["ms_per_person_landmarks"] = meanOf (landmark_ms_, people_);
+  doc.erase ("ms_per_image_detect");
+  if (pasted_.images > 0)
+    doc["pasted"] = pasted_.json (min_detection_height_);
   return doc;
+}
+
+EvaluationInputs
+loadEvaluationInputs (const std::vector<std::string> &tested, const std::vector<std::string> &train_also,
+                      const std::vector<std::string> &other_inputs, const std::string &json_path)
+{
+  EvaluationInputs inputs;
+  inputs.read = InputFiles (tested);
+  for (const auto &path : train_also)
+    inputs.read.add (path);
+  for (const auto &path : other_inputs)
+    if (!path.empty ())
+      inputs.read.add (path);
+  if (!json_path.empty ())
+    inputs.read.checkOutput (json_path);
+  inputs.images = loadLandmarkDatasets (tested);
+  inputs.tested = inputs.images.size ();
+  for (auto &image : loadLandmarkDatasets (train_also))
+    inputs.images.push_back (std::move (image));
+  for (const auto &image : inputs.images)
+    inputs.read.add (image.path);
+  if (!json_path.empty ())
+    inputs.read.checkOutput (json_path);
+  return inputs;
 }
 
 nlohmann::json
@@ -490,12 +595,26 @@ evaluateImages (const std::vector<AnnotatedImage> &images, const std::vector<std
     std::filesystem::create_directories (settings.overlay_dir);
     writePng (overlay, renderLandmarkOverlay (readImage (images[i].path, cv::IMREAD_COLOR), people));
   }
-  return part.json ();
+  nlohmann::json doc = part.json ();
+  if (settings.pasted && detector)
+  {
+    LandmarkEvaluation pasted;
+    pasted.setMinDetectionHeight (settings.min_detection_height);
+    const PeopleImages composites = pastedPeopleImages (images, test, settings.pasted_params);
+    for (std::size_t c = 0; c < composites.images.size (); ++c)
+    {
+      pasted.addDetection (composites.images[c], composites.boxes[c], composites.ignore[c], *detector, settings.threshold);
+      pooled.addPastedDetection (composites.images[c], composites.boxes[c], composites.ignore[c], *detector,
+                                 settings.threshold);
+    }
+    doc["pasted"] = pasted.detectionJson ();
+  }
+  return doc;
 }
 
 nlohmann::json
 crossValidate (const std::vector<AnnotatedImage> &images, std::size_t tested_images, int folds,
-               const ShapePredictorTrainingParams &shape_params, const PeopleDetectorTrainingParams *detector_params,
+               const ShapePredictorTrainingParams &shape_params, const DetectorTraining *detector_training,
                const PeopleDetector *detector, const EvaluationSettings &settings, const InputFiles &inputs)
 {
   if (folds < 2 || static_cast<std::size_t> (folds) > tested_images)
@@ -512,8 +631,8 @@ crossValidate (const std::vector<AnnotatedImage> &images, std::size_t tested_ima
               << test.size () << "\n";
     const ContourShapePredictor predictor = trainShapePredictor (images, train, shape_params);
     std::unique_ptr<PeopleDetector> fold_detector;
-    if (detector_params)
-      fold_detector = std::make_unique<PeopleDetector> (trainPeopleDetector (images, train, *detector_params));
+    if (detector_training)
+      fold_detector = std::make_unique<PeopleDetector> (trainPeopleDetector (images, train, *detector_training));
     per_fold.push_back (
       evaluateImages (images, test, predictor, fold_detector ? fold_detector.get () : detector, settings, inputs, pooled));
     std::cerr << "fold " << f + 1 << "/" << folds << ": " << per_fold.back ().dump () << "\n";

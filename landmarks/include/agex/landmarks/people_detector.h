@@ -11,16 +11,18 @@
 
 namespace agex
 {
-/** Training parameters; C, epsilon and the flips are the seed's choices. */
+/** Training parameters; epsilon and the flips are the seed's choices. */
 struct PeopleDetectorTrainingParams
 {
-  double c = 0.65;
+  /** The structural SVM's C. dlib averages the loss over the images, so C does not grow with
+    * the data: the seed's 0.65 underfits (see doc/landmarks.md for the comparison). */
+  double c = 20.0;
   double epsilon = 0.01;
   /** The detection window (pixels): its height is the smallest person found without
-    * upsampling, its shape the boxes' (40x96: 0.42 wide per height, the standard pedestrian
-    * box, which an upright person fits). Training boxes are made this shape around their
-    * centre, keeping their height. */
-  int window_width = 40;
+    * upsampling, its shape the boxes' (48x96: half as wide as high, which an upright person
+    * fits, arms and stride included). Training boxes are made this shape around their centre,
+    * keeping their height. */
+  int window_width = 48;
   int window_height = 96;
   int upsample = 0;        ///< times the training images (and detection) are doubled
   /** Images are resized by this factor before training and detection: below 1 trades
@@ -28,10 +30,11 @@ struct PeopleDetectorTrainingParams
   double scale = 1.0;
   /** Training images are shrunk (never enlarged) so that their tallest person is between
     * these multiples of the window height (spread evenly over the images): the SVM then
-    * scans a few small pyramid levels per image instead of a full-size pyramid, and the
-    * backgrounds are seen at several scales. 0, 0: images as they are. */
-  double train_min_person_windows = 0.0;
-  double train_max_person_windows = 0.0;
+    * scans a few small pyramid levels per image instead of a full-size pyramid (an 800-pixel
+    * person in a full-size pyramid: 12 levels), and the backgrounds are seen at several
+    * scales. 0, 0: images as they are. */
+  double train_min_person_windows = 1.2;
+  double train_max_person_windows = 3.0;
   bool add_flips = true;   ///< add left-right mirrored training images
   unsigned long num_threads = 0;  ///< 0: one per core
   bool verbose = false;

@@ -121,6 +121,10 @@ struct MaskAnnotationOptions
   ContourAnnotationParams contour;
 };
 
+/** The mask file as a grey silhouette (labelled pixels light, excluded labels mid grey,
+  * background dark), for overlays that show annotations without the photos. */
+cv::Mat maskSilhouette (const std::string &mask_path, const std::vector<int> &excluded_labels);
+
 /** Labels from "2,33,56". \throws std::runtime_error naming flag on anything else */
 std::vector<int> parseLabelList (const std::string &text, const std::string &flag);
 

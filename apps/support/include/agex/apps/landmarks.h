@@ -4,6 +4,7 @@
 
 #include <agex/landmarks/contour_shape_predictor.h>
 #include <agex/landmarks/imglab_dataset.h>
+#include <agex/landmarks/pasted_people.h>
 #include <agex/landmarks/people_detector.h>
 #include <agex/io/atomic_file.h>
 
@@ -59,8 +60,19 @@ std::vector<AnnotatedImage> loadLandmarkDatasets (const std::vector<std::string>
 
 /** Flags of dlib's shape predictor trainer (defaults from params). */
 boost::program_options::options_description shapeTrainerOptions (ShapePredictorTrainingParams &params);
-/** Flags of the people detector trainer (defaults from params). */
-boost::program_options::options_description detectorTrainerOptions (PeopleDetectorTrainingParams &params);
+/** How the people detector is trained: the SVM's settings, and the images it sees. */
+struct DetectorTraining
+{
+  PeopleDetectorTrainingParams params;
+  /** Train on the people pasted into each other's photos (agex::pastePeople): people that fill
+    * their photos alone teach the detector that a person fills the frame. */
+  bool paste_people = true;
+  /** Train on the photos as they are (too). */
+  bool originals = true;
+  PastedPeopleParams pasted;
+};
+/** Flags of the people detector trainer (defaults from training). */
+boost::program_options::options_description detectorTrainerOptions (DetectorTraining &training);
 
 /** Trains the shape predictor on the listed images (mirrored copies added). */
 ContourShapePredictor trainShapePredictor (const std::vector<AnnotatedImage> &images,
@@ -69,7 +81,12 @@ ContourShapePredictor trainShapePredictor (const std::vector<AnnotatedImage> &im
 /** Trains the people detector on the listed images (their outlines' boxes; ignore boxes are
   * ignore regions). */
 PeopleDetector trainPeopleDetector (const std::vector<AnnotatedImage> &images, const std::vector<std::size_t> &which,
-                                    const PeopleDetectorTrainingParams &params, std::size_t *ignored = nullptr);
+                                    const DetectorTraining &training, std::size_t *ignored = nullptr);
+
+/** The listed images with people pasted into each other's photos (agex::pastePeople): the
+  * pasted people are the people, the photos' own people and ignore boxes ignore regions. */
+PeopleImages pastedPeopleImages (const std::vector<AnnotatedImage> &images, const std::vector<std::size_t> &which,
+                                 const PastedPeopleParams &params);
 
 /** bundledDataFile ("models/agex_people_detector.svm"), the 2D apps' default people detector. */
 std::string bundledPeopleDetectorFile ();
@@ -100,7 +117,19 @@ public:
     * average precision, each matched one-to-one to the truths at IoU >= 0.5. */
   void add (const AnnotatedImage &image, const ContourShapePredictor &predictor, const PeopleDetector *detector,
             double threshold = 0.0);
+  /** Only the landmarks of add (). */
+  void addLandmarks (const AnnotatedImage &image, const ContourShapePredictor &predictor);
+  /** Only the detection of add (), on any image: people are their outlines' boxes, ignored
+    * the ignore regions. */
+  void addDetection (const cv::Mat &grey, const std::vector<cv::Rect> &people, const std::vector<cv::Rect> &ignored,
+                     const PeopleDetector &detector, double threshold);
+  /** As addDetection, into a second set of scores ("pasted" in json ()): people pasted into
+    * other photos. */
+  void addPastedDetection (const cv::Mat &grey, const std::vector<cv::Rect> &people, const std::vector<cv::Rect> &ignored,
+                           const PeopleDetector &detector, double threshold);
   nlohmann::json json () const;
+  /** The detection fields of json () alone. */
+  nlohmann::json detectionJson () const { return detection_.json (min_detection_height_); }
   double meanErrorPx () const { return people_ ? sum_error_px_ / people_ : 0.0; }
 
   static constexpr double kApScoreMargin = 0.5;
@@ -109,14 +138,23 @@ public:
   static constexpr double kMatchAspect = 0.41;
 
 private:
-  void addDetections (const AnnotatedImage &image, const std::vector<PersonDetection> &detections, double threshold);
+  struct DetectionScores
+  {
+    std::size_t images = 0, truths = 0, found = 0, false_detections = 0;
+    double ms = 0;
+    std::vector<std::pair<double, bool>> scored;  ///< (score, true positive) of every counted detection
+    nlohmann::json json (int min_height) const;
+  };
+  void addDetections (DetectionScores &scores, const std::vector<cv::Rect> &people, const std::vector<cv::Rect> &ignored,
+                      const std::vector<PersonDetection> &detections, double threshold) const;
+  void detect (DetectionScores &scores, const cv::Mat &grey, const std::vector<cv::Rect> &people,
+               const std::vector<cv::Rect> &ignored, const PeopleDetector &detector, double threshold) const;
 
-  std::size_t images_ = 0, people_ = 0, shoulder_people_ = 0, detect_images_ = 0, found_ = 0, truths_ = 0;
-  std::size_t false_detections_ = 0;
+  std::size_t images_ = 0, people_ = 0, shoulder_people_ = 0;
   int min_detection_height_ = 0;
   double sum_error_px_ = 0, sum_error_box_ = 0, sum_error_shoulder_ = 0, sum_contour_ = 0, sum_contour_box_ = 0;
-  double detect_ms_ = 0, landmark_ms_ = 0;
-  std::vector<std::pair<double, bool>> scored_;  ///< (score, true positive) of every counted detection
+  double landmark_ms_ = 0;
+  DetectionScores detection_, pasted_;
 };
 
 /** How agex_landmarks_eval scores. */
@@ -125,7 +163,25 @@ struct EvaluationSettings
   double threshold = 0.0;        ///< detection threshold for recall and false detections
   int min_detection_height = 0;  ///< shorter people are ignore regions for detection
   std::string overlay_dir;       ///< a PNG per tested image with the predicted landmarks (empty: none)
+  /** Also score detection on the tested images' people pasted into each other's photos
+    * (several people per image, many sizes, real backgrounds), under "pasted". */
+  bool pasted = false;
+  PastedPeopleParams pasted_params;
 };
+
+/** The images an evaluation reads, and every file it reads (no output may land on one). */
+struct EvaluationInputs
+{
+  std::vector<AnnotatedImage> images;  ///< the tested datasets' images, then the --train-also ones
+  std::size_t tested = 0;              ///< how many of images are tested
+  InputFiles read;
+};
+
+/** \brief Loads the datasets (tested, then training-only) and checks that json_path (when given)
+  * is none of the files read: the datasets, their images and other_inputs (models).
+  * \throws std::runtime_error */
+EvaluationInputs loadEvaluationInputs (const std::vector<std::string> &tested, const std::vector<std::string> &train_also,
+                                       const std::vector<std::string> &other_inputs, const std::string &json_path);
 
 /** \brief Scores predictor (and detector, when given) on images[test] into pooled; returns this
   * part's scores (LandmarkEvaluation::json). Overlays are checked against inputs. */
@@ -136,11 +192,11 @@ nlohmann::json evaluateImages (const std::vector<AnnotatedImage> &images, const 
 /** \brief Cross-validation by image: of the first tested_images images, image i is in fold
   * i mod folds; each fold is scored by a shape predictor (and, with detector_params, a people
   * detector) trained on all other images, the images after tested_images included (--train-also);
-  * without detector_params, detector (may be null) scores every fold. Returns the pooled scores
+  * without detector_training, detector (may be null) scores every fold. Returns the pooled scores
   * with "folds" and "per_fold". \throws std::runtime_error for fewer images than folds */
 nlohmann::json crossValidate (const std::vector<AnnotatedImage> &images, std::size_t tested_images, int folds,
                               const ShapePredictorTrainingParams &shape_params,
-                              const PeopleDetectorTrainingParams *detector_params, const PeopleDetector *detector,
+                              const DetectorTraining *detector_training, const PeopleDetector *detector,
                               const EvaluationSettings &settings, const InputFiles &inputs);
 
 /** Average precision (all-point interpolated, as PASCAL VOC since 2010) of scored detections

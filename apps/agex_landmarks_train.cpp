@@ -20,7 +20,7 @@ main (int argc, char **argv)
   std::vector<std::string> dataset_paths;
   std::string model_path, detector_path;
   agex::ShapePredictorTrainingParams shape_params;
-  agex::PeopleDetectorTrainingParams detector_params;
+  agex::apps::DetectorTraining detector_training;
   po::options_description general ("agex_landmarks_train --dataset XML --out MODEL [--detector-out FILE] [options]\n"
                                    "Trains the 180-landmark contour shape predictor (and the people detector)");
   general.add_options () ("help,h", "show this help")
@@ -28,7 +28,7 @@ main (int argc, char **argv)
     ("out", po::value (&model_path)->required (), "shape predictor model to write")
     ("detector-out", po::value (&detector_path), "also train the people detector and write it here");
   po::options_description all;
-  all.add (general).add (agex::apps::shapeTrainerOptions (shape_params)).add (agex::apps::detectorTrainerOptions (detector_params));
+  all.add (general).add (agex::apps::shapeTrainerOptions (shape_params)).add (agex::apps::detectorTrainerOptions (detector_training));
   try
   {
     if (!agex::apps::parseCommandLine (argc, argv, all, {}))
@@ -69,10 +69,10 @@ main (int argc, char **argv)
 
     if (!detector_path.empty ())
     {
-      detector_params.verbose = true;
+      detector_training.params.verbose = true;
       std::size_t ignored = 0;
       const agex::PeopleDetector detector =
-        agex::apps::trainPeopleDetector (images, all_images, detector_params, &ignored);
+        agex::apps::trainPeopleDetector (images, all_images, detector_training, &ignored);
       detector.save (detector_path);
       agex::apps::LandmarkEvaluation detection;
       for (const auto &image : images)

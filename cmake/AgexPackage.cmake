@@ -22,7 +22,9 @@ install(FILES ${PROJECT_SOURCE_DIR}/data/models/agex_bonn.yml ${PROJECT_SOURCE_D
   ${PROJECT_SOURCE_DIR}/data/models/LICENSE.bonn-data DESTINATION ${CMAKE_INSTALL_DATADIR}/agex/models)
 if(TARGET agex_landmarks_lib)
   install(FILES ${PROJECT_SOURCE_DIR}/data/models/agex_contour_landmarks.dat
-    ${PROJECT_SOURCE_DIR}/data/models/LICENSE.agex_contour_landmarks DESTINATION ${CMAKE_INSTALL_DATADIR}/agex/models)
+    ${PROJECT_SOURCE_DIR}/data/models/LICENSE.agex_contour_landmarks
+    ${PROJECT_SOURCE_DIR}/data/models/agex_people_detector.svm
+    ${PROJECT_SOURCE_DIR}/data/models/LICENSE.agex_people_detector DESTINATION ${CMAKE_INSTALL_DATADIR}/agex/models)
   install(FILES ${PROJECT_SOURCE_DIR}/data/images/five_people.jpg ${PROJECT_SOURCE_DIR}/data/images/LICENSE.pcl-test-data
     DESTINATION ${CMAKE_INSTALL_DATADIR}/agex/images)
 endif()

@@ -151,6 +151,236 @@ squareBox (const cv::Rect &box)
   return cv::Rect (box.x + box.width / 2 - side / 2, box.y + box.height / 2 - side / 2, side, side);
 }
 
+namespace
+{
+// The body's axes (up from the hints, right perpendicular to it on screen), its extent along
+// them and its centre (of area, which the trunk dominates, not of the outline, which the limbs
+// do), from the outline.
+struct BodyAxes
+{
+  cv::Point2f up, right, centroid{0.f, 0.f};
+  float top = -std::numeric_limits<float>::max (), bottom = std::numeric_limits<float>::max (), height = 1.f;
+
+  float heightOf (const cv::Point2f &p) const { return dot (p, up); }
+  float lateralOf (const cv::Point2f &p) const { return dot (p, right); }
+  /** Sideways offset from the body's centre line, positive to screen right. */
+  float sideOf (const cv::Point2f &p) const { return lateralOf (p) - lateralOf (centroid); }
+};
+
+BodyAxes
+bodyAxes (const std::vector<cv::Point> &contour, const cv::Point2f &hint_up)
+{
+  BodyAxes body;
+  body.up = normalised (hint_up, cv::Point2f (0.f, -1.f));
+  body.right = cv::Point2f (-body.up.y, body.up.x);  // screen right for an upright body
+  for (const cv::Point &p : contour)
+  {
+    body.top = std::max (body.top, body.heightOf (p));
+    body.bottom = std::min (body.bottom, body.heightOf (p));
+    body.centroid += cv::Point2f (p);
+  }
+  body.centroid *= 1.f / contour.size ();
+  const cv::Moments area = cv::moments (contour);
+  if (std::abs (area.m00) > 1.0)
+    body.centroid = cv::Point2f (static_cast<float> (area.m10 / area.m00), static_cast<float> (area.m01 / area.m00));
+  body.height = std::max (body.top - body.bottom, 1.f);
+  return body;
+}
+
+// Step 1. Unlabelled extremities labelled by position: the one nearest the top is the head when
+// it is high enough, the lowest two below the middle are feet, the rest hands. Labelled hints
+// take precedence.
+ContourAnchors
+labelExtremities (const ContourAnchors &anchors, const BodyAxes &body)
+{
+  ContourAnchors hints = anchors;
+  if (anchors.extremities.empty ())
+    return hints;
+  std::vector<cv::Point2f> rest = anchors.extremities;
+  std::sort (rest.begin (), rest.end (),
+             [&] (const cv::Point2f &a, const cv::Point2f &b) { return body.heightOf (a) > body.heightOf (b); });
+  if (!known (hints.head))
+  {
+    // Raised hands can be higher than the head: of the extremities near the top, the head is
+    // the one nearest the body's middle.
+    auto head = rest.end ();
+    for (auto it = rest.begin (); it != rest.end () && body.top - body.heightOf (*it) < 0.25f * body.height; ++it)
+      if (head == rest.end () || std::abs (body.sideOf (*it)) < std::abs (body.sideOf (*head)))
+        head = it;
+    if (head != rest.end ())
+    {
+      hints.head = *head;
+      rest.erase (head);
+    }
+  }
+  const float middle = body.bottom + 0.5f * body.height;
+  std::vector<cv::Point2f> feet, hands;
+  for (auto it = rest.rbegin (); it != rest.rend (); ++it)
+    (feet.size () < 2 && body.heightOf (*it) < middle - 0.2f * body.height ? feet : hands).push_back (*it);
+  if (hints.feet.empty ())
+    hints.feet = feet;
+  if (hints.hands.empty ())
+    for (const cv::Point2f &hand : hands)
+      if (hints.hands.size () < 2)
+        hints.hands.push_back (hand);
+  return hints;
+}
+
+// Step 2. The top of the head: the highest outline point near the head hint; without one, the
+// highest point within the body's central band (a raised hand is higher than the head but off
+// to the side), else the highest point.
+int
+findHeadTop (const std::vector<cv::Point> &contour, const cv::Point2f &hint, const BodyAxes &body, float head_band,
+             bool &from_hint)
+{
+  auto height = [&] (const cv::Point2f &p) { return body.heightOf (p); };
+  from_hint = false;
+  if (known (hint))
+  {
+    const float radius = 0.12f * body.height;  // about a head; wider would reach raised hands
+    const int head = argmaxOnContour (contour, height, [&] (int i) { return cv::norm (cv::Point2f (contour[i]) - hint) < radius; });
+    if (head >= 0)
+    {
+      from_hint = true;
+      return head;
+    }
+  }
+  const int central = argmaxOnContour (contour, height, [&] (int i) {
+    return std::abs (body.sideOf (contour[i])) < head_band * body.height;
+  });
+  return central >= 0 ? central : argmaxOnContour (contour, height, [] (int) { return true; });
+}
+
+// Step 3. Hints snapped to the outline, as positions counter-clockwise from the head top (at
+// most the first and the last two); hints farther than max_distance from it are dropped.
+std::vector<int>
+snapToOutline (const std::vector<cv::Point> &contour, const std::vector<cv::Point2f> &points, float max_distance)
+{
+  std::vector<int> positions;
+  for (const cv::Point2f &p : points)
+  {
+    if (!known (p))
+      continue;
+    float distance = 0.f;
+    const int index = nearestContourIndex (contour, p, &distance);
+    if (distance <= max_distance && index > 0)
+      positions.push_back (index);
+  }
+  std::sort (positions.begin (), positions.end ());
+  if (positions.size () > 2)
+    positions = {positions.front (), positions.back ()};
+  return positions;
+}
+
+// Step 4. The feet: the hints, else the lowest outline points on the screen-left and
+// screen-right of the body (a single known foot is kept on the side it lies on). False when the
+// outline has no point below the middle.
+bool
+findFeet (const std::vector<cv::Point> &contour, const BodyAxes &body, const std::vector<int> &feet, int &left,
+          int &right)
+{
+  auto lowest_on_side = [&] (float side) {
+    return argmaxOnContour (
+      contour, [&] (const cv::Point2f &p) { return -body.heightOf (p) + 0.3f * side * body.sideOf (p); },
+      [&] (int i) { return i > 0 && body.heightOf (contour[i]) < body.heightOf (body.centroid); });
+  };
+  if (feet.size () == 2)
+  {
+    left = feet[0];
+    right = feet[1];
+    return true;
+  }
+  left = lowest_on_side (-1.f);
+  right = lowest_on_side (1.f);
+  if (feet.size () == 1)
+    (std::abs (feet[0] - left) < std::abs (feet[0] - right) ? left : right) = feet[0];
+  return left >= 0 && right >= 0;
+}
+
+// Step 5. A hand without a hint. An arm held out is its farthest point sideways above the hips,
+// when that point lies more than params.hand_spread body heights out from the centre line;
+// otherwise (arms down, or merged with a coat) the hand is taken to be at the wrist's height: the
+// first outline point, going from the head top down that side, params.wrist_drop body heights
+// below the top. from..to is the side's stretch of the outline (head top to foot).
+int
+findHandWithoutHint (const std::vector<cv::Point> &contour, const BodyAxes &body, const ContourAnnotationParams &params,
+                     int from, int to, float side)
+{
+  const int out = argmaxOnContour (
+    contour, [&] (const cv::Point2f &p) { return side * body.sideOf (p); },
+    [&] (int i) { return i > from && i < to && body.heightOf (contour[i]) > body.heightOf (body.centroid) - 0.25f * body.height; });
+  if (out >= 0 && side * body.sideOf (contour[out]) > params.hand_spread * body.height)
+    return out;
+  const float wrist = body.top - params.wrist_drop * body.height;
+  const int n = static_cast<int> (contour.size ());
+  // Screen left runs forwards from the head top, screen right backwards from its end.
+  for (int step = 1; step < to - from; ++step)
+  {
+    const int i = side < 0 ? from + step : to - step;
+    if (i > 0 && i < n && body.heightOf (contour[i]) <= wrist)
+      return i;
+  }
+  return out;
+}
+
+// Step 6. Both hands: the hints, else findHandWithoutHint on each side (a single known hand
+// replaces the guess on its side of the feet).
+void
+findHands (const std::vector<cv::Point> &contour, const BodyAxes &body, const ContourAnnotationParams &params,
+           const std::vector<int> &hands, int foot_left, int foot_right, int &left, int &right)
+{
+  const int n = static_cast<int> (contour.size ());
+  if (hands.size () == 2)
+  {
+    left = hands[0];
+    right = hands[1];
+    return;
+  }
+  left = findHandWithoutHint (contour, body, params, 0, std::min (foot_left, foot_right), -1.f);
+  right = findHandWithoutHint (contour, body, params, std::max (foot_left, foot_right), n, 1.f);
+  if (hands.size () == 1)
+    (hands[0] < foot_left ? left : right) = hands[0];
+  if (left < 0)
+    left = std::max (1, std::min (foot_left, foot_right) / 2);
+  if (right < 0)
+    right = (std::max (foot_left, foot_right) + n) / 2;
+}
+
+// Step 7. Anchors in contour order (sorted when the hints were not) and pushed apart so that
+// every segment has some length. False when the outline is too short for them.
+bool
+orderAnchors (std::array<int, kContourAnchorCount> &order, int n, bool &reordered)
+{
+  reordered = !std::is_sorted (order.begin (), order.end ());
+  if (reordered)
+    std::sort (order.begin (), order.end ());
+  const int min_gap = std::max (1, n / (4 * kContourLandmarkCount));
+  for (int k = 1; k < kContourAnchorCount; ++k)
+    order[k] = std::max (order[k], order[k - 1] + min_gap);
+  return order.back () < n - min_gap;
+}
+
+// Step 8. kLandmarksPerSegment landmarks per segment, evenly by arc length.
+std::vector<cv::Point2f>
+sampleLandmarks (const std::vector<cv::Point> &contour, const std::array<int, kContourAnchorCount> &order)
+{
+  const int n = static_cast<int> (contour.size ());
+  std::vector<double> arc (n + 1, 0.0);
+  for (int i = 0; i < n; ++i)
+    arc[i + 1] = arc[i] + cv::norm (contour[(i + 1) % n] - contour[i]);
+  std::vector<cv::Point2f> landmarks;
+  landmarks.reserve (kContourLandmarkCount);
+  for (int k = 0; k < kContourAnchorCount; ++k)
+  {
+    const double start = arc[order[k]];
+    const double end = k + 1 < kContourAnchorCount ? arc[order[k + 1]] : arc[n];
+    for (int j = 0; j < kLandmarksPerSegment; ++j)
+      landmarks.push_back (pointAtArcLength (contour, arc, start + (end - start) * j / kLandmarksPerSegment));
+  }
+  return landmarks;
+}
+}  // namespace
+
 ContourAnnotation
 annotateContour (const cv::Mat &mask, const ContourAnchors &anchors, const ContourAnnotationParams &params)
 {
@@ -168,179 +398,36 @@ annotateContour (const cv::Mat &mask, const ContourAnchors &anchors, const Conto
     return result;
   }
   const int n = static_cast<int> (contour.size ());
-  const cv::Point2f up = normalised (anchors.up, cv::Point2f (0.f, -1.f));
-  const cv::Point2f right (-up.y, up.x);  // screen right for an upright body
-  auto height_of = [&] (const cv::Point2f &p) { return dot (p, up); };
-  auto lateral_of = [&] (const cv::Point2f &p) { return dot (p, right); };
-
-  float top = -std::numeric_limits<float>::max (), bottom = std::numeric_limits<float>::max ();
-  cv::Point2f centroid (0.f, 0.f);
-  for (const cv::Point &p : contour)
-  {
-    top = std::max (top, height_of (p));
-    bottom = std::min (bottom, height_of (p));
-    centroid += cv::Point2f (p);
-  }
-  centroid *= 1.f / n;
-  const float body_height = std::max (top - bottom, 1.f);
-  const float max_hint_distance = params.max_hint_distance * body_height;
-
-  // Label unlabelled extremities: the one nearest the top is the head when it is high
-  // enough, the lowest two below the middle are feet, the rest hands.
-  ContourAnchors hints = anchors;
-  if (!anchors.extremities.empty ())
-  {
-    std::vector<cv::Point2f> rest = anchors.extremities;
-    std::sort (rest.begin (), rest.end (),
-               [&] (const cv::Point2f &a, const cv::Point2f &b) { return height_of (a) > height_of (b); });
-    if (!known (hints.head))
-    {
-      // Raised hands can be higher than the head: of the extremities near the top, the
-      // head is the one nearest the body's middle.
-      auto head = rest.end ();
-      for (auto it = rest.begin (); it != rest.end () && top - height_of (*it) < 0.25f * body_height; ++it)
-        if (head == rest.end () ||
-            std::abs (lateral_of (*it) - lateral_of (centroid)) < std::abs (lateral_of (*head) - lateral_of (centroid)))
-          head = it;
-      if (head != rest.end ())
-      {
-        hints.head = *head;
-        rest.erase (head);
-      }
-    }
-    const float middle = bottom + 0.5f * body_height;
-    std::vector<cv::Point2f> feet, hands;
-    for (auto it = rest.rbegin (); it != rest.rend (); ++it)
-      (feet.size () < 2 && height_of (*it) < middle - 0.2f * body_height ? feet : hands).push_back (*it);
-    if (hints.feet.empty ())
-      hints.feet = feet;
-    if (hints.hands.empty ())
-      for (const cv::Point2f &hand : hands)
-        if (hints.hands.size () < 2)
-          hints.hands.push_back (hand);
-  }
-
-  // Top of the head: the highest outline point near the head hint (or overall).
-  int head = -1;
-  if (known (hints.head))
-  {
-    const float radius = 0.12f * body_height;  // about a head; wider would reach raised hands
-    head = argmaxOnContour (contour, height_of, [&] (int i) {
-      return cv::norm (cv::Point2f (contour[i]) - hints.head) < radius;
-    });
-  }
-  result.anchor_from_hint[0] = head >= 0;
-  if (head < 0)
-    head = argmaxOnContour (contour, height_of, [] (int) { return true; });
+  const BodyAxes body = bodyAxes (contour, anchors.up);
+  const ContourAnchors hints = labelExtremities (anchors, body);
+  bool head_from_hint = false;
+  const int head = findHeadTop (contour, hints.head, body, params.head_band, head_from_hint);
   std::rotate (contour.begin (), contour.begin () + head, contour.end ());
+  result.anchor_from_hint[0] = head_from_hint;
 
-  // Hints snapped to the outline, as positions counter-clockwise from the head top.
-  auto snapped = [&] (const std::vector<cv::Point2f> &points) {
-    std::vector<int> positions;
-    for (const cv::Point2f &p : points)
-    {
-      if (!known (p))
-        continue;
-      float distance = 0.f;
-      const int index = nearestContourIndex (contour, p, &distance);
-      if (distance <= max_hint_distance && index > 0)
-        positions.push_back (index);
-    }
-    std::sort (positions.begin (), positions.end ());
-    return positions;
-  };
-  std::vector<int> hands = snapped (hints.hands), feet = snapped (hints.feet);
-  if (hands.size () > 2)
-    hands = {hands.front (), hands.back ()};
-  if (feet.size () > 2)
-    feet = {feet.front (), feet.back ()};
-
-  // Missing feet: the lowest outline points on the screen-left and screen-right of the
-  // body; a single known foot is kept on the side it lies on.
-  const float centre_lateral = lateral_of (centroid);
-  auto lowest_on_side = [&] (float side) {
-    return argmaxOnContour (
-      contour, [&] (const cv::Point2f &p) { return -height_of (p) + 0.3f * side * (lateral_of (p) - centre_lateral); },
-      [&] (int i) { return i > 0 && height_of (contour[i]) < height_of (centroid); });
-  };
+  const float max_hint_distance = params.max_hint_distance * body.height;
+  const std::vector<int> hands = snapToOutline (contour, hints.hands, max_hint_distance);
+  const std::vector<int> feet = snapToOutline (contour, hints.feet, max_hint_distance);
   int foot_left = -1, foot_right = -1;
-  if (feet.size () == 2)
-  {
-    foot_left = feet[0];
-    foot_right = feet[1];
-  }
-  else
-  {
-    foot_left = lowest_on_side (-1.f);
-    foot_right = lowest_on_side (1.f);
-    if (feet.size () == 1)
-      (std::abs (feet[0] - foot_left) < std::abs (feet[0] - foot_right) ? foot_left : foot_right) = feet[0];
-  }
-  result.anchor_from_hint[2] = !feet.empty ();
-  result.anchor_from_hint[3] = feet.size () == 2;
-  if (foot_left < 0 || foot_right < 0)
+  if (!findFeet (contour, body, feet, foot_left, foot_right))
   {
     result.problem = "no feet found on the outline";
     return result;
   }
-
-  // Missing hands: the outline point farthest out sideways between the head and a foot,
-  // above the hips.
-  auto farthest_out = [&] (int from, int to, float side) {
-    return argmaxOnContour (
-      contour, [&] (const cv::Point2f &p) { return side * (lateral_of (p) - centre_lateral); },
-      [&] (int i) { return i > from && i < to && height_of (contour[i]) > height_of (centroid) - 0.25f * body_height; });
-  };
+  result.anchor_from_hint[2] = !feet.empty ();
+  result.anchor_from_hint[3] = feet.size () == 2;
   int hand_left = -1, hand_right = -1;
-  if (hands.size () == 2)
-  {
-    hand_left = hands[0];
-    hand_right = hands[1];
-  }
-  else
-  {
-    hand_left = farthest_out (0, std::min (foot_left, foot_right), -1.f);
-    hand_right = farthest_out (std::max (foot_left, foot_right), n, 1.f);
-    if (hands.size () == 1)
-    {
-      // The known hand replaces the guess on its side of the feet.
-      (hands[0] < foot_left ? hand_left : hand_right) = hands[0];
-    }
-  }
+  findHands (contour, body, params, hands, foot_left, foot_right, hand_left, hand_right);
   result.anchor_from_hint[1] = !hands.empty ();
   result.anchor_from_hint[4] = hands.size () == 2;
-  if (hand_left < 0)
-    hand_left = std::max (1, std::min (foot_left, foot_right) / 2);
-  if (hand_right < 0)
-    hand_right = (std::max (foot_left, foot_right) + n) / 2;
 
   std::array<int, kContourAnchorCount> order{0, hand_left, foot_left, foot_right, hand_right};
-  if (!std::is_sorted (order.begin (), order.end ()))
-  {
-    std::sort (order.begin (), order.end ());
-    result.anchors_reordered = true;
-  }
-  // Segments need some length; push crowded anchors apart along the outline.
-  const int min_gap = std::max (1, n / (4 * kContourLandmarkCount));
-  for (int k = 1; k < kContourAnchorCount; ++k)
-    order[k] = std::max (order[k], order[k - 1] + min_gap);
-  if (order.back () >= n - min_gap)
+  if (!orderAnchors (order, n, result.anchors_reordered))
   {
     result.problem = "outline too short for its anchors";
     return result;
   }
-
-  std::vector<double> arc (n + 1, 0.0);
-  for (int i = 0; i < n; ++i)
-    arc[i + 1] = arc[i] + cv::norm (contour[(i + 1) % n] - contour[i]);
-  result.landmarks.reserve (kContourLandmarkCount);
-  for (int k = 0; k < kContourAnchorCount; ++k)
-  {
-    const double start = arc[order[k]];
-    const double end = k + 1 < kContourAnchorCount ? arc[order[k + 1]] : arc[n];
-    for (int j = 0; j < kLandmarksPerSegment; ++j)
-      result.landmarks.push_back (pointAtArcLength (contour, arc, start + (end - start) * j / kLandmarksPerSegment));
-  }
+  result.landmarks = sampleLandmarks (contour, order);
   result.anchor_contour_index = order;
   result.tight_box = cv::boundingRect (contour);
   result.box = squareBox (result.tight_box);

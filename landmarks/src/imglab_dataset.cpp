@@ -1,6 +1,7 @@
 #include <agex/landmarks/imglab_dataset.h>
 #include <agex/io/atomic_file.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -14,6 +15,10 @@ namespace
 {
 // Just enough XML for imglab files: elements, attributes, text, comments, processing
 // instructions and the five predefined entities. No namespaces, no DTDs.
+// imglab nests 5 deep (dataset, images, image, box, part); the parser recurses once per
+// level, so the depth is bounded well before a deep file could exhaust the stack.
+constexpr int kMaxXmlDepth = 64;
+
 struct XmlNode
 {
   std::string name;
@@ -41,7 +46,7 @@ public:
         fail ("content after the root element");
       if (text_[pos_] != '<')
         fail ("text outside the root element");
-      root = parseElement ();
+      root = parseElement (1);
     }
     if (!root)
       fail ("no XML element (empty or not an XML file)");
@@ -55,13 +60,20 @@ public:
   }
 
 private:
+  // Counted on from the last position asked for (the parser moves forwards), so that a file
+  // of many elements is read in linear time.
   int
   lineAt (std::size_t pos) const
   {
-    int line = 1;
-    for (std::size_t i = 0; i < pos && i < text_.size (); ++i)
-      line += text_[i] == '\n';
-    return line;
+    pos = std::min (pos, text_.size ());
+    if (pos < counted_pos_)
+    {
+      counted_pos_ = 0;
+      counted_line_ = 1;
+    }
+    for (; counted_pos_ < pos; ++counted_pos_)
+      counted_line_ += text_[counted_pos_] == '\n';
+    return counted_line_;
   }
 
   bool startsWith (const char *s) const { return text_.compare (pos_, std::char_traits<char>::length (s), s) == 0; }
@@ -158,8 +170,11 @@ private:
   }
 
   std::unique_ptr<XmlNode>
-  parseElement ()
+  parseElement (int depth)
   {
+    if (depth > kMaxXmlDepth)
+      fail ("elements nested more than " + std::to_string (kMaxXmlDepth) +
+            " deep (imglab datasets nest 5 deep; not an imglab dataset)");
     auto node = std::make_unique<XmlNode> ();
     node->line = lineAt (pos_);
     ++pos_;  // '<'
@@ -222,7 +237,7 @@ private:
         return node;
       }
       else if (text_[pos_] == '<')
-        node->children.push_back (parseElement ());
+        node->children.push_back (parseElement (depth + 1));
       else
       {
         const std::size_t end = text_.find ('<', pos_);
@@ -235,6 +250,8 @@ private:
   std::string path_;
   std::string text_;
   std::size_t pos_ = 0;
+  mutable std::size_t counted_pos_ = 0;
+  mutable int counted_line_ = 1;
 };
 
 std::string

@@ -15,6 +15,7 @@
 #include <opencv2/objdetect.hpp>
 
 #include <algorithm>
+#include <cmath>
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
@@ -38,7 +39,62 @@ using detail::toDlib;
 using detail::toCv;
 using Scanner = dlib::scan_fhog_pyramid<dlib::pyramid_down<6>>;
 constexpr char kMagic[] = "agex_people_detector_fhog 2";
+constexpr double kPeopleNmsIoU = 0.5, kPeopleNmsCovered = 0.95;
+// OpenCV's people: the person fills the middle 0.75 of its 64x128 window's height.
+constexpr double kOpenCvPersonHeight = 0.75, kOpenCvPersonAspect = 0.41;
 
+void
+checkTrainingParams (const PeopleDetectorTrainingParams &params)
+{
+  if (!(params.scale > 0.05 && params.scale <= 4.0))
+    throw std::invalid_argument ("people detector training: scale must lie in (0.05, 4]");
+  if (params.window_width < 16 || params.window_height < 16 || params.window_width > 1024 || params.window_height > 1024)
+    throw std::invalid_argument ("people detector training: the window must be 16 to 1024 pixels wide and high");
+  if (!(params.c > 0) || !(params.epsilon > 0) || params.c > 1e6)
+    throw std::invalid_argument ("people detector training: C must lie in (0, 1e6] and epsilon be positive");
+  if (params.upsample < 0 || params.upsample > 4)
+    throw std::invalid_argument ("people detector training: upsample must lie in 0..4");
+  const double lo = params.train_min_person_windows, hi = params.train_max_person_windows;
+  if (!(lo == 0 && hi == 0) && !(lo >= 1.0 && hi >= lo && hi <= 100))
+    throw std::invalid_argument ("people detector training: the person heights must be 0, 0 (off) or 1 <= min <= max <= 100 "
+                                 "window heights");
+}
+
+// The factor a training image is resized by: the detection scale, shrunk further so that the
+// tallest person is a given number of window heights tall (spread over the images by the
+// golden ratio, so that every run picks the same sizes).
+double
+trainingScale (const std::vector<cv::Rect> &boxes, std::size_t index, const PeopleDetectorTrainingParams &params)
+{
+  int tallest = 0;
+  for (const cv::Rect &box : boxes)
+    tallest = std::max (tallest, box.height);
+  if (params.train_max_person_windows <= 0 || tallest <= 0)
+    return params.scale;
+  const double spread = std::fmod (0.5 + 0.6180339887498949 * static_cast<double> (index), 1.0);
+  const double windows = params.train_min_person_windows +
+                         (params.train_max_person_windows - params.train_min_person_windows) * spread;
+  return params.scale * std::min (1.0, windows * params.window_height / (tallest * params.scale));
+}
+
+// Two people the suppression would merge cannot both be found: the smaller becomes an ignore
+// region (dlib refuses such a labelling).
+std::size_t
+moveOverlappingToIgnore (std::vector<dlib::rectangle> &targets, std::vector<dlib::rectangle> &regions,
+                         const dlib::test_box_overlap &overlap)
+{
+  std::sort (targets.begin (), targets.end (),
+             [] (const dlib::rectangle &a, const dlib::rectangle &b) { return a.area () > b.area (); });
+  std::vector<dlib::rectangle> kept;
+  for (const dlib::rectangle &box : targets)
+  {
+    const bool clash = std::any_of (kept.begin (), kept.end (), [&] (const dlib::rectangle &k) { return overlap (k, box); });
+    (clash ? regions : kept).push_back (box);
+  }
+  const std::size_t moved = targets.size () - kept.size ();
+  targets = std::move (kept);
+  return moved;
+}
 
 }  // namespace
 
@@ -72,30 +128,30 @@ PeopleDetector::train (const std::vector<cv::Mat> &grey_images, const std::vecto
     throw std::invalid_argument ("people detector training: one box list per image needed");
   if (ignore_regions.size () != boxes.size ())
     throw std::invalid_argument ("people detector training: one ignore-region list per image needed");
-  if (!(params.scale > 0.05 && params.scale <= 4.0))
-    throw std::invalid_argument ("people detector training: scale must lie in (0.05, 4]");
+  checkTrainingParams (params);
   dlib::array<dlib::array2d<unsigned char>> images (grey_images.size ());
   std::vector<std::vector<dlib::rectangle>> targets (grey_images.size ()), regions (grey_images.size ());
-  const auto scaled = [&] (const cv::Rect &box) {
-    return toDlib (cv::Rect (cv::Point (static_cast<int> (std::lround (box.x * params.scale)),
-                                        static_cast<int> (std::lround (box.y * params.scale))),
-                             cv::Size (static_cast<int> (std::lround (box.width * params.scale)),
-                                       static_cast<int> (std::lround (box.height * params.scale)))));
-  };
+  const double aspect = static_cast<double> (params.window_width) / params.window_height;
   for (std::size_t i = 0; i < grey_images.size (); ++i)
   {
+    const double factor = trainingScale (boxes[i], i, params);
+    const auto scaled = [&] (const cv::Rect &box) {
+      return cv::Rect (cv::Point (static_cast<int> (std::lround (box.x * factor)), static_cast<int> (std::lround (box.y * factor))),
+                       cv::Size (static_cast<int> (std::lround (box.width * factor)),
+                                 static_cast<int> (std::lround (box.height * factor))));
+    };
     cv::Mat grey = toGrey (grey_images[i]);
     // At least one pixel: OpenCV asserts on an empty target size, and a tiny image simply
     // holds no box the window can reach (removed below).
-    if (params.scale != 1.0 && !grey.empty ())
+    if (factor != 1.0 && !grey.empty ())
       cv::resize (grey, grey,
-                  cv::Size (std::max (1, cvRound (grey.cols * params.scale)), std::max (1, cvRound (grey.rows * params.scale))),
-                  0, 0, cv::INTER_AREA);
+                  cv::Size (std::max (1, cvRound (grey.cols * factor)), std::max (1, cvRound (grey.rows * factor))), 0, 0,
+                  factor < 1.0 ? cv::INTER_AREA : cv::INTER_LINEAR);
     dlib::assign_image (images[i], dlib::cv_image<unsigned char> (grey));
     for (const cv::Rect &box : boxes[i])
-      targets[i].push_back (scaled (box));
+      targets[i].push_back (toDlib (uprightBox (scaled (box), aspect)));
     for (const cv::Rect &box : ignore_regions[i])
-      regions[i].push_back (scaled (box));
+      regions[i].push_back (toDlib (scaled (box)));
   }
   for (int u = 0; u < params.upsample; ++u)
     dlib::upsample_image_dataset<dlib::pyramid_down<2>> (images, targets, regions);
@@ -105,6 +161,14 @@ PeopleDetector::train (const std::vector<cv::Mat> &grey_images, const std::vecto
   Scanner scanner;
   scanner.set_detection_window_size (params.window_width, params.window_height);
   dlib::structural_object_detection_trainer<Scanner> trainer (scanner);
+  // dlib would take the overlap of non-maximum suppression from the training boxes; with one
+  // person per image that is "any overlap at all", and of two people side by side only one
+  // would be found. People overlapping more than this are one detection.
+  const dlib::test_box_overlap overlap (kPeopleNmsIoU, kPeopleNmsCovered);
+  trainer.set_overlap_tester (overlap);
+  std::size_t overlapping = 0;
+  for (std::size_t i = 0; i < targets.size (); ++i)
+    overlapping += moveOverlappingToIgnore (targets[i], regions[i], overlap);
   trainer.set_num_threads (params.num_threads ? params.num_threads : std::max (1u, std::thread::hardware_concurrency ()));
   trainer.set_c (params.c);
   trainer.set_epsilon (params.epsilon);
@@ -119,7 +183,7 @@ PeopleDetector::train (const std::vector<cv::Mat> &grey_images, const std::vecto
     kept += targets[i].size ();
   }
   if (ignored)
-    *ignored = removed_count;
+    *ignored = removed_count + overlapping;
   if (kept == 0)
     throw std::invalid_argument ("people detector training: no box the " + std::to_string (params.window_width) + "x" +
                                  std::to_string (params.window_height) + " window can match");
@@ -260,14 +324,13 @@ PeopleDetector::detect (const cv::Mat &image, double threshold) const
     hog.groupRectangles (found, weights, 2, 0.2);
     for (std::size_t i = 0; i < found.size (); ++i)
     {
-      // The 64x128 window holds a person about 96 pixels tall in its middle: report the
-      // square box of the person as agex_annotate would.
+      // The 64x128 window holds a person about 96 pixels tall in its middle.
       const cv::Rect &r = found[i];
-      const double side = 0.75 * r.height / impl_->scale;
+      const double side = kOpenCvPersonHeight * r.height / impl_->scale;
       const double cx = (r.x + 0.5 * r.width) / impl_->scale, cy = (r.y + 0.5 * r.height) / impl_->scale;
-      people.push_back ({cv::Rect (static_cast<int> (std::lround (cx - side / 2)), static_cast<int> (std::lround (cy - side / 2)),
-                                   static_cast<int> (std::lround (side)), static_cast<int> (std::lround (side))),
-                         i < weights.size () ? weights[i] : 0.0});
+      const cv::Rect square (static_cast<int> (std::lround (cx - side / 2)), static_cast<int> (std::lround (cy - side / 2)),
+                             static_cast<int> (std::lround (side)), static_cast<int> (std::lround (side)));
+      people.push_back ({uprightBox (square, kOpenCvPersonAspect), i < weights.size () ? weights[i] : 0.0});
     }
     sortByScore (people);
     return people;
@@ -293,6 +356,13 @@ PeopleDetector::detect (const cv::Mat &image, double threshold) const
   }
   sortByScore (people);
   return people;
+}
+
+cv::Rect
+uprightBox (const cv::Rect &box, double aspect)
+{
+  const int width = std::max (1, static_cast<int> (std::lround (aspect * box.height)));
+  return cv::Rect (box.x + (box.width - width) / 2, box.y, width, box.height);
 }
 
 double

@@ -32,7 +32,7 @@ for app in "${apps[@]}"; do
   grep -q "\[$app\]($app.md)" "$doc_dir/README.md" || fail "doc/apps/README.md does not link $app.md"
   # Apps with subcommands list each one's options under "APP SUB --help".
   case $app in
-    agex_annotate) subcommands="coco rgbd" ;;
+    agex_annotate) subcommands="coco masks rgbd" ;;
     agex_convert) subcommands="bonn u16 pcd" ;;
     agex_eval) subcommands="coverage detect compare" ;;
     *) subcommands="" ;;

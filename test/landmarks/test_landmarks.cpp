@@ -7,6 +7,7 @@
 #include <agex/landmarks/contour_shape_predictor.h>
 #include <agex/landmarks/imglab_dataset.h>
 #include <agex/landmarks/people_detector.h>
+#include <agex/landmarks/person_masks.h>
 
 #include "test_support.h"
 
@@ -20,6 +21,7 @@
 #include <opencv2/videoio.hpp>
 
 #include <algorithm>
+#include <chrono>
 #include <random>
 
 #include <sys/wait.h>
@@ -183,6 +185,73 @@ TEST (ImglabDataset, BadFilesNameTheFileAndTheProblem)
   fs::remove_all (dir);
 }
 
+// A 350 KB file nested 50,000 deep overflowed the stack of the recursive parser (issue #18):
+// now a clear error naming the file and the line, at any depth beyond the bound.
+TEST (ImglabDataset, DeepNestingIsAClearErrorNotAStackOverflow)
+{
+  const fs::path dir = tempDir ("deep");
+  const std::string path = (dir / "deep.xml").string ();
+  std::string deep = "<dataset>\n<images>\n<image file='a.png'>\n";
+  for (int i = 0; i < 50000; ++i)
+    deep += "<a>";
+  for (int i = 0; i < 50000; ++i)
+    deep += "</a>";
+  deep += "\n</image></images></dataset>\n";
+  writeAll (path, deep);
+  try
+  {
+    agex::readImglabDataset (path);
+    ADD_FAILURE () << "a 50,000-deep file was read";
+  }
+  catch (const std::runtime_error &e)
+  {
+    EXPECT_NE (std::string (e.what ()).find (path + ": line 4: elements nested more than 64 deep"), std::string::npos)
+      << e.what ();
+  }
+  // Unknown elements nested to the bound are still skipped.
+  std::string nested = "<dataset><images><image file='a.png'>";
+  for (int i = 0; i < 61; ++i)
+    nested += "<a>";
+  for (int i = 0; i < 61; ++i)
+    nested += "</a>";
+  writeAll (path, nested + "<box top='1' left='2' width='3' height='4'/></image></images></dataset>");
+  const agex::ImglabDataset d = agex::readImglabDataset (path);
+  ASSERT_EQ (d.images.size (), 1u);
+  EXPECT_EQ (d.images[0].boxes.size (), 1u);
+  fs::remove_all (dir);
+}
+
+// A large flat file is read in linear time (the line numbers were counted from the start for
+// every element): 900 images of 180 parts, as agex_annotate writes for CCP.
+TEST (ImglabDataset, LargeFilesAreReadQuickly)
+{
+  agex::ImglabDataset dataset;
+  for (int i = 0; i < 900; ++i)
+  {
+    agex::ImglabImage image;
+    image.file = std::to_string (i) + ".jpg";
+    agex::ImglabBox box;
+    box.rect = cv::Rect (1, 2, 300, 300);
+    for (int k = 0; k < 180; ++k)
+      box.parts[agex::contourLandmarkName (k)] = cv::Point2f (10.f + k, 20.f);
+    image.boxes.push_back (box);
+    dataset.images.push_back (image);
+  }
+  const fs::path dir = tempDir ("large");
+  const std::string path = (dir / "large.xml").string ();
+  agex::writeImglabDataset (path, dataset);
+  const auto start = std::chrono::steady_clock::now ();
+  const agex::ImglabDataset back = agex::readImglabDataset (path);
+  const double seconds = std::chrono::duration<double> (std::chrono::steady_clock::now () - start).count ();
+  EXPECT_EQ (back.images.size (), 900u);
+  // Six header lines, then 184 per image (image, box, 180 parts, end of box, end of image).
+  EXPECT_EQ (back.images[899].boxes[0].line, 8 + 184 * 899);
+  // Quadratic counting took minutes; linear reading takes well under a second even on a busy
+  // machine (a bound that only catches the quadratic behaviour, not a timing target).
+  EXPECT_LT (seconds, 20.0);
+  fs::remove_all (dir);
+}
+
 TEST (ContourAnnotation, LandmarkNamesAndMirror)
 {
   EXPECT_EQ (agex::contourLandmarkName (7), "007");
@@ -311,6 +380,48 @@ TEST (ContourAnnotation, DistanceToPolyline)
 {
   const std::vector<cv::Point2f> square{{0, 0}, {10, 0}, {10, 10}, {0, 10}};
   EXPECT_NEAR (agex::meanDistanceToClosedPolyline ({{5, 2}, {5, 5}, {12, 5}}, square), (2 + 5 + 2) / 3.0, 1e-9);
+}
+
+// Without hints, hands that hang down have no extremity on the outline: the hand anchors are
+// put at the wrist's height on the outer side of each arm, the same place on every upright
+// person (and not on an elbow, a hip or a coat's widest point, wherever that happens to be).
+TEST (ContourAnnotation, HangingArmsAnchorAtTheWristHeight)
+{
+  const Figure f = drawFigure (cv::Size (320, 320), cv::Point2f (160, 150), 1.5f, 1.2f, 0.35f);
+  agex::ContourAnnotationParams exact;
+  exact.closing_px = 0;
+  const agex::ContourAnnotation a = agex::annotateContour (f.mask, agex::ContourAnchors (), exact);
+  ASSERT_TRUE (a.ok) << a.problem;
+  const float top = a.tight_box.y, height = static_cast<float> (a.tight_box.height - 1);
+  const float wrist = top + exact.wrist_drop * height;
+  for (const int anchor : {36, 144})
+  {
+    EXPECT_NEAR (a.landmarks[anchor].y, wrist, 2.0) << anchor;
+    // On the arm, outside the trunk (21 pixels either side of the middle).
+    EXPECT_GT (std::abs (a.landmarks[anchor].x - 160.f), 24.f) << a.landmarks[anchor];
+  }
+  EXPECT_LT (a.landmarks[36].x, 160.f);
+  EXPECT_GT (a.landmarks[144].x, 160.f);
+  // Arms held out are anchored at their tips.
+  const Figure out = drawFigure (cv::Size (320, 320), cv::Point2f (160, 160), 1.5f, 0.5f, 0.35f);
+  const agex::ContourAnnotation b = agex::annotateContour (out.mask, agex::ContourAnchors (), exact);
+  ASSERT_TRUE (b.ok);
+  EXPECT_LT (cv::norm (b.landmarks[36] - out.hand_left), 8.0);
+  EXPECT_LT (cv::norm (b.landmarks[144] - out.hand_right), 8.0);
+}
+
+// A hand raised above the head is the highest point, but off to the side: the head top stays
+// landmark 0.
+TEST (ContourAnnotation, RaisedHandIsNotTheHeadTop)
+{
+  Figure f = drawFigure (cv::Size (320, 320), cv::Point2f (160, 170), 1.5f, 1.2f, 0.35f);
+  // From the side of the trunk (the stick figure's arms start at its middle), up past the head.
+  const cv::Point2f shoulder (160 - 20, 170 - 60 + 12), hand = shoulder + cv::Point2f (-51, -64);
+  cv::line (f.mask, shoulder, hand, 255, 10);
+  ASSERT_LT (hand.y, f.head_top.y);
+  const agex::ContourAnnotation a = agex::annotateContour (f.mask, agex::ContourAnchors ());
+  ASSERT_TRUE (a.ok) << a.problem;
+  EXPECT_LT (cv::norm (a.landmarks[0] - f.head_top), 4.0) << a.landmarks[0];
 }
 
 // Synthetic figures on textured backgrounds: a small cascade must beat the mean shape
@@ -479,6 +590,44 @@ TEST (PeopleDetector, TrainsOnSyntheticFiguresAndRoundTrips)
   fs::remove_all (dir);
 }
 
+// Trained on one figure per image, the detector still keeps two people whose boxes overlap
+// apart: dlib would take the suppression from the training boxes ("any overlap" when no two
+// overlap), and of two people side by side find one.
+TEST (PeopleDetector, NeighboursWithOverlappingBoxesAreBothFound)
+{
+  std::mt19937 rng (3);
+  std::uniform_real_distribution<float> arm (-0.5f, 1.2f), legs (0.15f, 0.45f), where (70.f, 170.f);
+  std::vector<cv::Mat> images;
+  std::vector<std::vector<cv::Rect>> boxes;
+  for (int i = 0; i < 8; ++i)
+  {
+    const Figure f = drawFigure (cv::Size (240, 240), cv::Point2f (where (rng), 115), 0.9f, arm (rng), legs (rng));
+    cv::Mat noise (f.mask.size (), CV_8UC1);
+    cv::randu (noise, 0, 60);
+    images.push_back (noise + f.mask * 0.7);
+    boxes.push_back ({agex::annotateContour (f.mask, agex::ContourAnchors ()).box});
+  }
+  agex::PeopleDetectorTrainingParams params;
+  params.window_width = params.window_height = 64;
+  params.num_threads = 2;
+  const agex::PeopleDetector detector = agex::PeopleDetector::train (images, boxes, params);
+  const Figure a = drawFigure (cv::Size (320, 240), cv::Point2f (120, 115), 0.9f, 1.0f, 0.3f);
+  const Figure b = drawFigure (cv::Size (320, 240), cv::Point2f (200, 115), 0.9f, 1.0f, 0.3f);
+  const cv::Rect box_a = agex::annotateContour (a.mask, agex::ContourAnchors ()).box;
+  const cv::Rect box_b = agex::annotateContour (b.mask, agex::ContourAnchors ()).box;
+  ASSERT_GT (agex::boxIoU (box_a, box_b), 0.1);  // the boxes overlap
+  cv::Mat noise (a.mask.size (), CV_8UC1);
+  cv::randu (noise, 0, 60);
+  const auto found = detector.detect (cv::Mat (noise + (a.mask | b.mask) * 0.7));
+  for (const cv::Rect &truth : {box_a, box_b})
+  {
+    double best = 0;
+    for (const auto &d : found)
+      best = std::max (best, agex::boxIoU (d.box, truth));
+    EXPECT_GT (best, 0.5) << truth;
+  }
+}
+
 // Every training image has two figures, one boxed and one in an ignore region. Had the
 // unboxed figure counted as background, the positives and negatives would look alike; as an
 // ignore region it does not, and the detector finds both figures of a new image (trained
@@ -586,6 +735,18 @@ TEST (LandmarkApps, PartlyAnnotatedBoxesAreNamedByLine)
   EXPECT_EQ (images[0].ignored.size (), 1u);
   EXPECT_NE (warning.find ("1 box(es) without contour landmarks"), std::string::npos) << warning;
   fs::remove_all (dir);
+}
+#endif
+
+#ifdef AGEX_LANDMARKS_APP_SUPPORT
+// All-point interpolated AP by hand: hits at ranks 1 and 3 of 3 truths: precision 1 up to
+// recall 1/3, then 2/3 up to recall 2/3 (the 0.5 at rank 2 is lifted to rank 3's 2/3).
+TEST (LandmarkEvaluation, AveragePrecisionByHand)
+{
+  EXPECT_NEAR (agex::apps::averagePrecision ({{0.9, true}, {0.8, false}, {0.7, true}}, 3), 1.0 / 3 + 2.0 / 9, 1e-12);
+  EXPECT_NEAR (agex::apps::averagePrecision ({{0.7, true}, {0.9, true}}, 2), 1.0, 1e-12);  // sorted by score
+  EXPECT_DOUBLE_EQ (agex::apps::averagePrecision ({{0.9, false}}, 1), 0.0);
+  EXPECT_DOUBLE_EQ (agex::apps::averagePrecision ({}, 0), 0.0);
 }
 #endif
 
@@ -790,9 +951,12 @@ TEST (LandmarkApps, VideoFileFrameByFrame)
   }
   ASSERT_EQ (decoded.size (), 3u);
 
+  // OpenCV's detector finds these pedestrians seen from behind (the bundled one, trained on
+  // frontal street-fashion photos, does not); the video path is the same for either.
+  const std::string app = std::string (AGEX_LANDMARKS_EXECUTABLE) + " --opencv-detector";
   const std::string from_video = (dir / "video.json").string (), from_stills = (dir / "stills.json").string ();
-  ASSERT_EQ (run (std::string (AGEX_LANDMARKS_EXECUTABLE) + " --video " + video + " --json " + from_video), 0);
-  std::string stills_command = std::string (AGEX_LANDMARKS_EXECUTABLE);
+  ASSERT_EQ (run (app + " --video " + video + " --json " + from_video), 0);
+  std::string stills_command = app;
   for (const auto &frame : decoded)
     stills_command += " " + frame;
   ASSERT_EQ (run (stills_command + " --json " + from_stills), 0);
@@ -813,6 +977,28 @@ TEST (LandmarkApps, VideoFileFrameByFrame)
   }
   EXPECT_GT (people, 0u);
 
+  // One JSON line per frame: into a file, and streamed on standard output as each frame is done.
+  const std::string lines_path = (dir / "video.jsonl").string (), streamed = (dir / "streamed.jsonl").string ();
+  ASSERT_EQ (run (app + " --video " + video + " --json-lines " + lines_path), 0);
+  ASSERT_EQ (std::system ((app + " --video " + video + " --json-lines - > " + streamed +
+                           " 2> /dev/null")
+                            .c_str ()),
+             0);
+  for (const std::string &file : {lines_path, streamed})
+  {
+    std::istringstream in (readAll (file));
+    std::string line;
+    std::size_t n = 0;
+    for (; std::getline (in, line); ++n)
+    {
+      const nlohmann::json frame = nlohmann::json::parse (line);
+      EXPECT_EQ (frame["source"], video + "#" + std::to_string (n)) << file;
+      ASSERT_LT (n, 3u) << file;
+      EXPECT_EQ (frame["people"], v["frames"][n]["people"]) << file << " frame " << n;
+    }
+    EXPECT_EQ (n, 3u) << file;
+  }
+
   // --max-frames stops early; a missing video and a file that is no video are refused.
   ASSERT_EQ (run (std::string (AGEX_LANDMARKS_EXECUTABLE) + " --video " + video + " --max-frames 2 --json " + from_video), 0);
   EXPECT_EQ (nlohmann::json::parse (readAll (from_video))["frames"].size (), 2u);
@@ -820,6 +1006,288 @@ TEST (LandmarkApps, VideoFileFrameByFrame)
   const std::string text = (dir / "notes.txt").string ();
   writeAll (text, "not a video\n");
   EXPECT_NE (run (std::string (AGEX_LANDMARKS_EXECUTABLE) + " --video " + text + " --json " + from_video), 0);
+  fs::remove_all (dir);
+}
+
+// A palette PNG (colour type 3), as Penn-Fudan's PedMasks are: OpenCV cannot write one, and
+// reads it back as the palette's colours. Stored (uncompressed) deflate blocks keep this short.
+std::uint32_t
+crc32Of (const std::string &bytes)
+{
+  std::uint32_t crc = 0xFFFFFFFFu;
+  for (const unsigned char c : bytes)
+  {
+    crc ^= c;
+    for (int k = 0; k < 8; ++k)
+      crc = crc & 1 ? 0xEDB88320u ^ (crc >> 1) : crc >> 1;
+  }
+  return ~crc;
+}
+
+std::string
+bigEndian (std::uint32_t v)
+{
+  return {static_cast<char> (v >> 24), static_cast<char> (v >> 16), static_cast<char> (v >> 8), static_cast<char> (v)};
+}
+
+void
+writePalettePng (const std::string &path, const cv::Mat &indices, const std::vector<cv::Vec3b> &rgb)
+{
+  auto chunk = [] (const std::string &type, const std::string &data) {
+    return bigEndian (static_cast<std::uint32_t> (data.size ())) + type + data + bigEndian (crc32Of (type + data));
+  };
+  std::string raw;
+  for (int y = 0; y < indices.rows; ++y)
+  {
+    raw += '\0';  // filter: none
+    raw.append (reinterpret_cast<const char *> (indices.ptr (y)), indices.cols);
+  }
+  std::string zlib = "\x78\x01";
+  for (std::size_t at = 0; at < raw.size (); at += 65535)
+  {
+    const std::size_t n = std::min<std::size_t> (65535, raw.size () - at);
+    zlib += static_cast<char> (at + n == raw.size ());
+    zlib += {static_cast<char> (n & 0xFF), static_cast<char> (n >> 8), static_cast<char> (~n & 0xFF),
+             static_cast<char> ((~n >> 8) & 0xFF)};
+    zlib += raw.substr (at, n);
+  }
+  std::uint32_t a = 1, b = 0;
+  for (const unsigned char c : raw)
+  {
+    a = (a + c) % 65521;
+    b = (b + a) % 65521;
+  }
+  zlib += bigEndian (b << 16 | a);
+  std::string palette;
+  for (const cv::Vec3b &c : rgb)
+    palette += {static_cast<char> (c[0]), static_cast<char> (c[1]), static_cast<char> (c[2])};
+  const std::string ihdr = bigEndian (indices.cols) + bigEndian (indices.rows) + std::string ("\x08\x03\x00\x00\x00", 5);
+  writeAll (path, std::string ("\x89PNG\r\n\x1a\n", 8) + chunk ("IHDR", ihdr) + chunk ("PLTE", palette) +
+                    chunk ("IDAT", zlib) + chunk ("IEND", ""));
+}
+
+int
+runCapturing (const std::string &command, const fs::path &dir, std::string *out, std::string *err)
+{
+  const std::string out_file = (dir / "stdout.txt").string (), err_file = (dir / "stderr.txt").string ();
+  const int status = std::system ((command + " > " + out_file + " 2> " + err_file).c_str ());
+  *out = readAll (out_file);
+  *err = readAll (err_file);
+  return WIFEXITED (status) ? WEXITSTATUS (status) : -1;
+}
+
+// Label maps (one person per image, excluded labels), instance masks in Penn-Fudan's layout
+// (STEM_mask.png, palette PNGs), and the masks that cannot be used, each named with its reason.
+TEST (LandmarkApps, AnnotateMaskFolders)
+{
+  const fs::path dir = tempDir ("masks");
+  for (const char *sub : {"labels/images", "labels/masks", "peds/PNGImages", "peds/PedMasks"})
+    fs::create_directories (dir / sub);
+  const Figure f = drawFigure (cv::Size (300, 300), cv::Point2f (150, 150), 1.2f, 1.2f, 0.3f);
+  cv::Mat labels = f.mask / 255 * 5;
+  labels (cv::Rect (120, 146, 130, 14)).setTo (2);  // a bag across the waist, bulging to the right
+  const cv::Mat photo = 40 + f.mask / 2;
+  ASSERT_TRUE (cv::imwrite ((dir / "labels/images/person.png").string (), photo));
+  ASSERT_TRUE (cv::imwrite ((dir / "labels/masks/person.png").string (), labels));
+  ASSERT_TRUE (cv::imwrite ((dir / "labels/images/wrong.png").string (), photo));
+  ASSERT_TRUE (cv::imwrite ((dir / "labels/masks/wrong.png").string (), labels (cv::Rect (0, 0, 200, 200))));
+  ASSERT_TRUE (cv::imwrite ((dir / "labels/images/empty.png").string (), photo));
+  ASSERT_TRUE (cv::imwrite ((dir / "labels/masks/empty.png").string (), cv::Mat::zeros (300, 300, CV_8UC1)));
+  ASSERT_TRUE (cv::imwrite ((dir / "labels/images/junk.png").string (), photo));
+  writeAll ((dir / "labels/masks/junk.png").string (), "not a PNG");
+  ASSERT_TRUE (cv::imwrite ((dir / "labels/images/nomask.png").string (), photo));
+  const std::string app = AGEX_ANNOTATE_EXECUTABLE, xml = (dir / "labels.xml").string ();
+  std::string out, err;
+  ASSERT_EQ (runCapturing (app + " masks --images " + (dir / "labels/images").string () + " --masks " +
+                             (dir / "labels/masks").string () + " --labels-excluded 2,33,56 --out " + xml,
+                           dir, &out, &err),
+             0)
+    << err;
+  EXPECT_NE (out.find ("1 images, 1 people outlined, 0 ignore boxes, 4 images left out"), std::string::npos) << out;
+  for (const char *expected : {"wrong.png: left out: mask of another size than its image", "empty.png: left out: empty mask",
+                               "junk.png: left out: unreadable mask", "nomask.png: left out: no mask"})
+    EXPECT_NE (err.find (expected), std::string::npos) << expected << "\n" << err;
+  const agex::ImglabDataset d = agex::readImglabDataset (xml);
+  ASSERT_EQ (d.images.size (), 1u);
+  ASSERT_EQ (d.images[0].boxes.size (), 1u);
+  const agex::ImglabBox &box = d.images[0].boxes[0];
+  ASSERT_EQ (box.parts.size (), 180u);
+  // The bag split the body; the outline still reaches the feet, and leaves the bag's bulge out.
+  EXPECT_LT (cv::norm (box.parts.at ("072") - f.foot_left), 8.0) << box.parts.at ("072");
+  EXPECT_LT (cv::norm (box.parts.at ("108") - f.foot_right), 8.0) << box.parts.at ("108");
+  for (const auto &[name, p] : box.parts)
+    EXPECT_LT (p.x, 215.f) << name << " " << p;
+
+  // Penn-Fudan: PNGImages/X.png with PedMasks/X_mask.png, two people and one too small.
+  cv::Mat peds = cv::Mat::zeros (300, 400, CV_8UC1);
+  const Figure a = drawFigure (cv::Size (400, 300), cv::Point2f (100, 150), 1.2f, 0.6f, 0.3f);
+  const Figure b = drawFigure (cv::Size (400, 300), cv::Point2f (290, 150), 1.2f, 1.1f, 0.3f);
+  peds.setTo (1, a.mask);
+  peds.setTo (2, b.mask);
+  cv::rectangle (peds, cv::Rect (380, 10, 6, 20), 3, cv::FILLED);
+  writePalettePng ((dir / "peds/PedMasks/FudanPed00001_mask.png").string (), peds,
+                   {{0, 0, 0}, {128, 0, 0}, {0, 128, 0}, {128, 128, 0}, {0, 0, 0}});
+  ASSERT_TRUE (cv::imwrite ((dir / "peds/PNGImages/FudanPed00001.png").string (), cv::Mat (40 + (a.mask | b.mask) / 2)));
+  const std::string peds_xml = (dir / "peds.xml").string ();
+  const std::string peds_command = app + " masks --images " + (dir / "peds/PNGImages").string () + " --masks " +
+                                   (dir / "peds/PedMasks").string () + " --instances --out " + peds_xml;
+  ASSERT_EQ (runCapturing (peds_command, dir, &out, &err), 0) << err;
+  EXPECT_NE (err.find ("FudanPed00001.png: person 3: ignore box: shorter than 48 px"), std::string::npos) << err;
+  const agex::ImglabDataset p = agex::readImglabDataset (peds_xml);
+  ASSERT_EQ (p.images.size (), 1u);
+  ASSERT_EQ (p.images[0].boxes.size (), 3u);
+  EXPECT_EQ (p.images[0].boxes[0].parts.size (), 180u);
+  EXPECT_LT (cv::norm (p.images[0].boxes[0].parts.at ("000") - a.head_top), 4.0);  // value 1 is the left one
+  EXPECT_LT (cv::norm (p.images[0].boxes[1].parts.at ("000") - b.head_top), 4.0);
+  EXPECT_TRUE (p.images[0].boxes[2].ignore);
+  // Flags that contradict each other, and names that are not there.
+  EXPECT_EQ (runCapturing (peds_command + " --labels-excluded 2", dir, &out, &err), 1);
+  EXPECT_NE (err.find ("--labels-excluded applies to label maps"), std::string::npos) << err;
+  EXPECT_EQ (runCapturing (peds_command + " --only FudanPed00002.png", dir, &out, &err), 1);
+  EXPECT_EQ (runCapturing (peds_command + " --skip FudanPed00001.png", dir, &out, &err), 1);  // nothing left
+  EXPECT_EQ (runCapturing (app + " masks --images " + (dir / "labels/images").string () + " --masks " +
+                             (dir / "labels/masks").string () + " --labels-excluded 2,x --out " + xml,
+                           dir, &out, &err),
+             1);
+  EXPECT_NE (err.find ("'x' is not a label"), std::string::npos) << err;
+  fs::remove_all (dir);
+}
+
+// COCO RLE segmentations, compressed and as count lists, beside polygons; crowd annotations
+// become ignore boxes and other categories are left out; the summary says why.
+TEST (LandmarkApps, AnnotateCocoRleMasks)
+{
+  const fs::path dir = tempDir ("coco_rle");
+  const cv::Size size (420, 300);
+  std::vector<Figure> figures;
+  cv::Mat all = cv::Mat::zeros (size, CV_8UC1);
+  for (const float x : {80.f, 210.f, 340.f})
+  {
+    figures.push_back (drawFigure (size, cv::Point2f (x, 150), 1.1f, 0.9f, 0.3f));
+    all |= figures.back ().mask;
+  }
+  ASSERT_TRUE (cv::imwrite ((dir / "people.png").string (), cv::Mat (40 + all / 2)));
+  auto bbox = [] (const cv::Mat &mask) {
+    const cv::Rect r = cv::boundingRect (mask);
+    return nlohmann::json::array ({r.x, r.y, r.width, r.height});
+  };
+  const std::vector<std::uint32_t> counts0 = agex::cocoRleFromMask (figures[0].mask);
+  std::vector<std::vector<cv::Point>> contours;
+  cv::findContours (figures[2].mask.clone (), contours, cv::RETR_EXTERNAL, cv::CHAIN_APPROX_SIMPLE);
+  std::vector<float> polygon;
+  for (const cv::Point &q : contours[0])
+    polygon.insert (polygon.end (), {static_cast<float> (q.x), static_cast<float> (q.y)});
+  cv::Mat crowd = cv::Mat::zeros (size, CV_8UC1);
+  crowd (cv::Rect (5, 5, 60, 40)).setTo (255);
+  nlohmann::json coco = {
+    {"images", {{{"id", 1}, {"file_name", "people.png"}, {"width", size.width}, {"height", size.height}}}},
+    {"categories", {{{"id", 1}, {"name", "person"}}, {{"id", 18}, {"name", "dog"}}}},
+    {"annotations",
+     {{{"id", 10}, {"image_id", 1}, {"category_id", 1}, {"iscrowd", 0}, {"bbox", bbox (figures[0].mask)},
+       {"segmentation", {{"size", {size.height, size.width}}, {"counts", agex::cocoRleString (counts0)}}}},
+      {{"id", 11}, {"image_id", 1}, {"category_id", 1}, {"iscrowd", 0}, {"bbox", bbox (figures[1].mask)},
+       {"segmentation", {{"size", {size.height, size.width}}, {"counts", agex::cocoRleFromMask (figures[1].mask)}}}},
+      {{"id", 12}, {"image_id", 1}, {"category_id", 1}, {"iscrowd", 0}, {"bbox", bbox (figures[2].mask)},
+       {"segmentation", {polygon}}},
+      {{"id", 13}, {"image_id", 1}, {"category_id", 1}, {"iscrowd", 1}, {"bbox", bbox (crowd)},
+       {"segmentation", {{"size", {size.height, size.width}}, {"counts", agex::cocoRleFromMask (crowd)}}}},
+      {{"id", 14}, {"image_id", 1}, {"category_id", 18}, {"iscrowd", 0}, {"bbox", {1, 1, 5, 5}}, {"segmentation", {}}}}}};
+  const std::string json = (dir / "coco.json").string (), xml = (dir / "coco.xml").string ();
+  writeAll (json, coco.dump ());
+  const std::string command = std::string (AGEX_ANNOTATE_EXECUTABLE) + " coco --json " + json + " --images " +
+                              dir.string () + " --out " + xml;
+  std::string out, err;
+  ASSERT_EQ (runCapturing (command, dir, &out, &err), 0) << err;
+  EXPECT_NE (out.find ("1 images, 3 people outlined, 1 ignore boxes (crowd annotation (iscrowd): 1)"), std::string::npos)
+    << out;
+  EXPECT_NE (err.find ("person 13: ignore box: crowd annotation (iscrowd)"), std::string::npos) << err;
+  const agex::ImglabDataset d = agex::readImglabDataset (xml);
+  ASSERT_EQ (d.images.size (), 1u);
+  ASSERT_EQ (d.images[0].boxes.size (), 4u);
+  for (int i = 0; i < 3; ++i)
+  {
+    // The same outline as the mask itself gives.
+    const agex::ContourAnnotation direct = agex::annotateContour (figures[i].mask, agex::ContourAnchors ());
+    ASSERT_TRUE (direct.ok);
+    EXPECT_LT (cv::norm (d.images[0].boxes[i].parts.at ("000") - direct.landmarks[0]), 1.5) << i;
+    EXPECT_LT (cv::norm (d.images[0].boxes[i].parts.at ("090") - direct.landmarks[90]), 1.5) << i;
+  }
+  EXPECT_TRUE (d.images[0].boxes[3].ignore);
+  // An RLE of another size than the image, and a damaged RLE string, name the annotation.
+  coco["annotations"][0]["segmentation"]["size"] = {200, size.width};
+  writeAll (json, coco.dump ());
+  EXPECT_EQ (runCapturing (command, dir, &out, &err), 1);
+  EXPECT_NE (err.find ("people.png: person 10: the RLE mask is 420x200"), std::string::npos) << err;
+  coco["annotations"][0]["segmentation"] = {{"size", {size.height, size.width}}, {"counts", "25 4"}};
+  writeAll (json, coco.dump ());
+  EXPECT_EQ (runCapturing (command, dir, &out, &err), 1);
+  EXPECT_NE (err.find ("person 10: character ' ' at 2"), std::string::npos) << err;
+  fs::remove_all (dir);
+}
+#endif
+
+#if defined(AGEX_ANNOTATE_EXECUTABLE) && defined(AGEX_LANDMARKS_EVAL_EXECUTABLE)
+// The evaluation reports detection AP, false detections per image and the contour distance
+// per box height; a deeply nested dataset is refused by name (it crashed the app before).
+TEST (LandmarkApps, EvalReportsDetectionAndRefusesDeepFiles)
+{
+  const fs::path dir = tempDir ("eval");
+  agex::ImglabDataset dataset;
+  std::vector<double> box_heights;
+  for (int i = 0; i < 3; ++i)
+  {
+    const Figure f = drawFigure (cv::Size (260, 260), cv::Point2f (120.f + 10 * i, 130), 1.2f, 0.4f + 0.3f * i, 0.3f);
+    const std::string image = "figure" + std::to_string (i) + ".png";
+    ASSERT_TRUE (cv::imwrite ((dir / image).string (), cv::Mat (40 + f.mask / 2)));
+    const agex::ContourAnnotation a = agex::annotateContour (f.mask, agex::ContourAnchors ());
+    ASSERT_TRUE (a.ok);
+    agex::ImglabImage entry;
+    entry.file = image;
+    agex::ImglabBox box;
+    box.rect = a.box;
+    box_heights.push_back (a.box.height);
+    for (int k = 0; k < agex::kContourLandmarkCount; ++k)
+      box.parts[agex::contourLandmarkName (k)] = a.landmarks[k];
+    entry.boxes.push_back (box);
+    dataset.images.push_back (entry);
+  }
+  const std::string xml = (dir / "figures.xml").string (), json = (dir / "eval.json").string ();
+  agex::writeImglabDataset (xml, dataset);
+  const std::string app = AGEX_LANDMARKS_EVAL_EXECUTABLE;
+  std::string out, err;
+  ASSERT_EQ (runCapturing (app + " --dataset " + xml + " --model " + AGEX_SOURCE_DIR +
+                             "/data/models/agex_contour_landmarks.dat --opencv-detector --json " + json,
+                           dir, &out, &err),
+             0)
+    << err;
+  const nlohmann::json doc = nlohmann::json::parse (readAll (json));
+  EXPECT_EQ (doc["people"], 3);
+  EXPECT_EQ (doc["detection_people"], 3);
+  for (const char *key : {"detection_ap", "detection_recall", "false_detections_per_image", "mean_contour_distance_px",
+                          "mean_contour_distance_box_height", "mean_error_box_height"})
+    EXPECT_TRUE (doc[key].is_number ()) << key << ": " << doc[key];
+  // The mean of distance / box height lies between the mean distance over the largest and over
+  // the smallest box.
+  const double px = doc["mean_contour_distance_px"], per_box = doc["mean_contour_distance_box_height"];
+  EXPECT_GT (px, 0.0);
+  EXPECT_GE (per_box, px / *std::max_element (box_heights.begin (), box_heights.end ()) - 1e-9);
+  EXPECT_LE (per_box, px / *std::min_element (box_heights.begin (), box_heights.end ()) + 1e-9);
+  ASSERT_EQ (runCapturing (app + " --dataset " + xml + " --model " + AGEX_SOURCE_DIR +
+                             "/data/models/agex_contour_landmarks.dat --no-detector --json " + json,
+                           dir, &out, &err),
+             0);
+  EXPECT_TRUE (nlohmann::json::parse (readAll (json))["detection_ap"].is_null ());
+
+  std::string deep = "<dataset>\n<images>\n";
+  for (int i = 0; i < 50000; ++i)
+    deep += "<image file='a.png'>";
+  writeAll ((dir / "deep.xml").string (), deep);
+  EXPECT_EQ (runCapturing (app + " --dataset " + (dir / "deep.xml").string () + " --model " + AGEX_SOURCE_DIR +
+                             "/data/models/agex_contour_landmarks.dat --no-detector",
+                           dir, &out, &err),
+             1);  // a stack overflow was a signal, not exit code 1
+  EXPECT_NE (err.find ((dir / "deep.xml").string () + ": line 3: elements nested more than 64 deep"), std::string::npos)
+    << err;
   fs::remove_all (dir);
 }
 #endif

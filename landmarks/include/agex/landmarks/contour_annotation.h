@@ -8,6 +8,7 @@
 // means the same body place in every image. Anchors come from keypoints (COCO), from
 // unlabelled extremities (AGEX on depth) or, where missing, from the contour's shape.
 // Mirroring an image left-right maps landmark i to landmark (180 - i) mod 180.
+// The rules for anchors without hints are those of ContourAnnotationParams (doc/landmarks.md).
 
 #include <opencv2/core.hpp>
 
@@ -52,6 +53,17 @@ struct ContourAnnotationParams
   /** How far hand hints may lie from the contour before they are ignored, as a fraction
     * of the body's height (a wrist hidden behind the body says nothing about the outline). */
   float max_hint_distance = 0.12f;
+  // Anchors from the shape alone (no hint), in body heights (the outline's extent along up):
+  /** The head top is the highest outline point at most this far sideways from the body's
+    * centre line (through the centre of its area): a raised hand is higher, but off to the side. */
+  float head_band = 0.12f;
+  /** A hand is the outline's farthest point sideways above the hips when that lies farther
+    * than this from the centre line (an arm held out; arm span is about one body height)... */
+  float hand_spread = 0.25f;
+  /** ...else the first outline point this far below the top, going from the head top down
+    * the hand's side: the outer side of a hanging arm at the wrist's height (about 0.52 of the
+    * stature below the head for an upright adult), or the coat's edge there. */
+  float wrist_drop = 0.52f;
 };
 
 struct ContourAnnotation

@@ -11,18 +11,30 @@
 
 namespace agex
 {
-/** Training parameters; defaults are the seed's choices. */
+/** Training parameters; epsilon and the flips are the seed's choices. */
 struct PeopleDetectorTrainingParams
 {
-  double c = 0.65;
+  /** The structural SVM's C. dlib averages the loss over the images, so C does not grow with
+    * the data: the seed's 0.65 underfits (see doc/landmarks.md for the comparison). */
+  double c = 20.0;
   double epsilon = 0.01;
-  int window_width = 100;
-  int window_height = 100;
+  /** The detection window (pixels): its height is the smallest person found without
+    * upsampling, its shape the boxes' (48x96: half as wide as high, which an upright person
+    * fits, arms and stride included). Training boxes are made this shape around their centre,
+    * keeping their height. */
+  int window_width = 48;
+  int window_height = 96;
   int upsample = 0;        ///< times the training images (and detection) are doubled
   /** Images are resized by this factor before training and detection: below 1 trades
-    * the smallest people found for speed (window 70x70 at 0.7 finds people as small
-    * as 100x100 at 1.0, in about half the time). */
+    * the smallest people found for speed. */
   double scale = 1.0;
+  /** Training images are shrunk (never enlarged) so that their tallest person is between
+    * these multiples of the window height (spread evenly over the images): the SVM then
+    * scans a few small pyramid levels per image instead of a full-size pyramid (an 800-pixel
+    * person in a full-size pyramid: 12 levels), and the backgrounds are seen at several
+    * scales. 0, 0: images as they are. */
+  double train_min_person_windows = 1.2;
+  double train_max_person_windows = 3.0;
   bool add_flips = true;   ///< add left-right mirrored training images
   unsigned long num_threads = 0;  ///< 0: one per core
   bool verbose = false;
@@ -30,9 +42,14 @@ struct PeopleDetectorTrainingParams
 
 struct PersonDetection
 {
-  cv::Rect box;  ///< square, like the training boxes of agex_annotate
+  /** The person's box: the detection window's shape (upright, the person's height, centred);
+    * squareBox (box) is the box the contour shape predictor takes. */
+  cv::Rect box;
   double score = 0.0;
 };
+
+/** box made aspect wide per height around its centre, its height kept. */
+cv::Rect uprightBox (const cv::Rect &box, double aspect);
 
 class PeopleDetector
 {
@@ -52,7 +69,8 @@ public:
   static PeopleDetector train (const std::vector<cv::Mat> &grey_images, const std::vector<std::vector<cv::Rect>> &boxes,
                                const std::vector<std::vector<cv::Rect>> &ignore_regions,
                                const PeopleDetectorTrainingParams &params, std::size_t *ignored = nullptr);
-  /** OpenCV's pretrained people detector (64x128 window, INRIA people). Images are
+  /** OpenCV's pretrained people detector (64x128 window, INRIA people; the person is the
+    * middle 0.75 of the window's height, boxes 0.42 wide per height). Images are
     * resized by \p scale before detection: below 1 it is faster (about scale^2 of the
     * time) and misses people shorter than about 96 / scale pixels (the apps use 0.5).
     * \throws std::invalid_argument unless 0.05 < scale <= 4 */
@@ -66,7 +84,8 @@ public:
   std::string description () const;
 
   /** People in an image (grey or BGR), highest score first; threshold shifts the SVM's
-    * decision value. */
+    * decision value. The search covers every scale from the window's height up to the image's
+    * (a pyramid of steps of 5/6), so people of 96 to 960 pixels in a 1280x960 image. */
   std::vector<PersonDetection> detect (const cv::Mat &image, double threshold = 0.0) const;
 
 private:

@@ -1,0 +1,276 @@
+// The fused detector: candidates from AGEX points and forest part modes (merging on
+// hand-built inputs), a hand resting on the torso (no geodesic extremum) found by the fused
+// detector where no AGEX point lies, the model and its forest saved and loaded with identical
+// scores, and a model trained at one resolution scoring at another.
+
+#include "test_support.h"
+
+#include <agex/detection/body_part_detector.h>
+#include <agex/detection/fused_candidates.h>
+#include <agex/detection/training_samples.h>
+
+#include <gtest/gtest.h>
+
+#include <random>
+
+namespace
+{
+using namespace agex_test;
+
+// A forest of one test: a pixel nearer than 1.99 m is a hand, any other body pixel is other
+// body. f(x) = d(x) - d(x + v s) with v far off the frame (clamped to the border, background
+// 65535 mm): f > threshold exactly when d > 1990 mm.
+agex::BodyPartForest::ConstPtr
+handByDepthForest ()
+{
+  agex::BodyPartForest::Tree tree;
+  tree.depth = 1;
+  tree.complete = true;
+  agex::BodyPartForest::Node node;
+  node.du2 = 0;
+  node.dv2 = 30000;
+  node.threshold = 1990.f - 65535.f;
+  tree.nodes = {node};
+  tree.leaf_labels = {0, 1};
+  std::vector<agex::BodyPartForest::ClassInfo> classes{{"hand", agex::kLabelHand}, {"other", agex::kLabelOtherBody}};
+  return std::make_shared<agex::BodyPartForest> (classes, std::vector<agex::BodyPartForest::Tree>{tree}, 525.f,
+                                                 agex::BodyPartForest::VoteRule::Average, -1);
+}
+
+/** A standing stick person at 2 m (head up, two legs, one arm held out) with a hand resting
+  * flat on the torso 2 cm in front of it, at (hand_x, hand_y) metres. */
+struct Scene
+{
+  Cloud::Ptr cloud;
+  std::vector<agex::PartLabel> labels;
+  Eigen::Vector3f hand = Eigen::Vector3f::Zero ();
+};
+
+Scene
+makeScene (const Camera &cam, double hand_x, double hand_y, double shift)
+{
+  Figure body;
+  body.centre = Eigen::Vector2d (shift, 0.0);
+  body.depth = 2.0;
+  body.disc_radius = 0.2;
+  const double limb_angles[] = {-90.0, 70.0, 110.0, 10.0};  // head, legs, the arm held out
+  const double lengths[] = {0.45, 0.85, 0.85, 0.55};
+  for (int i = 0; i < 4; ++i)
+  {
+    const double a = limb_angles[i] * M_PI / 180.0;
+    body.limbs.push_back ({Eigen::Vector2d (std::cos (a), std::sin (a)), lengths[i], i == 0 ? 0.1 : 0.06});
+  }
+  Figure hand;
+  hand.centre = Eigen::Vector2d (shift + hand_x, hand_y);
+  hand.depth = 1.98;
+  hand.disc_radius = 0.05;
+  Scene s;
+  s.cloud = rasterise ({body, hand}, cam);
+  auto label = [&] (agex::BodyPart part, int instance, const Eigen::Vector3f &tip, const Eigen::Vector3f &base) {
+    agex::PartLabel l;
+    l.part = part;
+    l.instance = instance;
+    l.tip = tip;
+    l.base = base;
+    l.visible = true;
+    s.labels.push_back (l);
+  };
+  label (agex::BodyPart::Head, 0, body.tip3D (0), body.centre3D ());
+  label (agex::BodyPart::Foot, 0, body.tip3D (1), body.centre3D ());
+  label (agex::BodyPart::Foot, 1, body.tip3D (2), body.centre3D ());
+  label (agex::BodyPart::Hand, 0, body.tip3D (3), body.centre3D ());
+  s.hand = hand.centre3D ();
+  label (agex::BodyPart::Hand, 1, s.hand, s.hand + Eigen::Vector3f (0.f, -0.1f, 0.02f));
+  return s;
+}
+
+agex::DetectorSettings
+fusedSettings ()
+{
+  agex::DetectorSettings settings;
+  settings.kind = agex::DetectorKind::Fused;
+  settings.pipeline.isolate_people = false;  // a stick figure without a floor: the box isolates it
+  settings.pipeline.crop_min = Eigen::Vector3f (-2.f, -2.f, 1.f);
+  settings.pipeline.crop_max = Eigen::Vector3f (2.f, 2.f, 3.f);
+  settings.pipeline.median_window = 0;
+  settings.pipeline.k = 6;
+  settings.forest_file = "forest.agexforest";
+  return settings;
+}
+
+/** A fused model trained on scenes with the resting hand at random places on the torso. */
+agex::DetectorModel::ConstPtr
+trainFused (const Camera &cam, const agex::BodyPartForest::ConstPtr &forest)
+{
+  const agex::DetectorSettings settings = fusedSettings ();
+  const agex::PatchGeometry geometry{21, 0.6f, 0.3f};
+  std::mt19937 rng (7);
+  std::uniform_real_distribution<double> along (-0.08, 0.08);
+  std::vector<agex::DepthPatch> patches;
+  std::vector<std::vector<float>> auxiliary;
+  std::vector<int> classes;
+  for (int i = 0; i < 16; ++i)
+  {
+    const Scene scene = makeScene (cam, along (rng), 0.05 + along (rng), along (rng));
+    const agex::DepthPipelineResult prepared = agex::runDepthPipeline (scene.cloud, settings.pipeline);
+    pcl::PointCloud<agex::BodyPartLabelPoint> labels;
+    std::vector<agex::PartMode> modes;
+    agex::labelPersonParts (prepared, forest, static_cast<float> (cam.fx), static_cast<float> (cam.fy), 1, labels,
+                            modes);
+    agex::collectFusedTrainingSamples (prepared, labels, modes, static_cast<float> (cam.fx), settings.pipeline.up,
+                                       settings.fused, scene.labels, 0.1f, geometry, patches, auxiliary, classes);
+  }
+  auto classifier = std::make_shared<agex::PatchClassifier> ();
+  agex::PatchClassifierParams params;
+  params.weak_count = 30;
+  params.dictionary.fragments_per_class = 10;
+  classifier->train (patches, auxiliary, agex::fusedFeatureNames (), classes, agex::kBodyPartCount, params);
+  classifier->setPatchGeometry (geometry);
+  return std::make_shared<const agex::DetectorModel> (classifier, settings);
+}
+
+/** The most confident hand detection's distance to p (infinity without a hand). */
+float
+handDistance (const std::vector<agex::BodyPartDetection> &detections, const Eigen::Vector3f &p, float *confidence)
+{
+  for (const auto &d : detections)
+    if (d.part == agex::BodyPart::Hand && (d.position - p).norm () <= 0.1f)
+    {
+      *confidence = d.confidence;
+      return (d.position - p).norm ();
+    }
+  *confidence = 0.f;
+  return std::numeric_limits<float>::infinity ();
+}
+
+TEST (FusedCandidates, MergedWithinTheRadiusKeepingBothSources)
+{
+  agex::DepthPipelineResult prepared;
+  prepared.filtered = nanCloud (20, 10);
+  for (int u = 0; u < 20; ++u)
+    (*prepared.filtered) (u, 5) = pcl::PointXYZ (0.01f * u, 0.f, 2.f);
+  agex::InterestPoint p;
+  p.getVector3fMap () = Eigen::Vector3f (0.f, 0.f, 2.f);
+  p.u = 0, p.v = 5, p.rank = 2;
+  p.getOrientationVector3fMap () = Eigen::Vector3f (-1.f, 0.f, 0.f);
+  prepared.interest_points.push_back (p);
+  agex::PartMode m;
+  m.part = agex::kLabelHand;
+  m.confidence = 0.8f;
+  m.position = Eigen::Vector3f (0.10f, 0.f, 2.f);
+  m.direction = Eigen::Vector3f (-1.f, 0.f, 0.f);
+  m.tip = Eigen::Vector3f (0.01f, 0.f, 2.f);
+  m.tip_index = 5 * 20 + 1;
+  for (int u = 1; u <= 15; ++u)
+    m.support.push_back (5 * 20 + u);
+  agex::FusedCandidateParams params;
+  params.merge_radius = 0.03f;
+  const auto candidates = agex::fusedCandidates (prepared, {m}, params);
+  // The AGEX point (x 0), the mode's tip 1 cm from it (merged into it), its peak (x 0.10) and
+  // its other end (x 0.15): three candidates.
+  ASSERT_EQ (candidates.size (), 3u);
+  EXPECT_EQ (candidates[0].sources, agex::kFromAgex | agex::kFromModeTip);
+  EXPECT_EQ (candidates[0].mode_part, agex::kLabelHand);
+  EXPECT_FLOAT_EQ (candidates[0].position.x (), 0.f);  // the AGEX point is kept
+  EXPECT_EQ (candidates[1].sources, agex::kFromModePosition);
+  EXPECT_NEAR (candidates[1].position.x (), 0.10f, 1e-6f);
+  EXPECT_EQ (candidates[2].sources, agex::kFromModeEnd);
+  EXPECT_NEAR (candidates[2].position.x (), 0.15f, 1e-6f);
+  EXPECT_NEAR (candidates[2].orientation.x (), 1.f, 1e-6f);  // pointing the other way
+  // Without merging every source stands alone; low-confidence modes give none.
+  params.merge_radius = 0.f;
+  EXPECT_EQ (agex::fusedCandidates (prepared, {m}, params).size (), 4u);
+  params.min_mode_confidence = 0.9f;
+  EXPECT_EQ (agex::fusedCandidates (prepared, {m}, params).size (), 1u);
+}
+
+TEST (FusedDetector, AHandRestingOnTheTorsoIsFoundWhereNoAgexPointIs)
+{
+  const Camera cam{262.5, 262.5, 159.5, 119.5, 320, 240};
+  const auto forest = handByDepthForest ();
+  const auto model = trainFused (cam, forest);
+  const Scene scene = makeScene (cam, 0.03, 0.02, 0.02);
+
+  agex::BodyPartDetector<pcl::PointXYZ> detector;
+  detector.setModel (model);
+  detector.setForest (forest);
+  detector.setFocalLength (static_cast<float> (cam.fx), static_cast<float> (cam.fy));
+  detector.setInputCloud (scene.cloud);
+  std::vector<agex::BodyPartDetection> detections;
+  detector.compute (detections);
+
+  // Not a geodesic extremum: no AGEX point near it, so the AGEX-only detector cannot name it.
+  for (const auto &p : detector.getIntermediate ().interest_points)
+    EXPECT_GT ((p.getVector3fMap () - scene.hand).norm (), 0.1f) << "rank " << p.rank;
+  float confidence = 0.f;
+  EXPECT_LE (handDistance (detections, scene.hand, &confidence), 0.1f);
+  EXPECT_GT (confidence, 0.5f);
+  // The held-out arm's hand and the head are still found through their AGEX points.
+  bool head = false;
+  for (const auto &d : detections)
+    head = head || (d.part == agex::BodyPart::Head && d.confidence > 0.5f &&
+                    (d.position - scene.labels[0].tip).norm () <= 0.1f);
+  EXPECT_TRUE (head);
+}
+
+TEST (FusedDetector, ModelAndForestSavedAndLoadedScoreTheSame)
+{
+  const Camera cam{262.5, 262.5, 159.5, 119.5, 320, 240};
+  const auto forest = handByDepthForest ();
+  const auto model = trainFused (cam, forest);
+  TempDir dir;
+  forest->save (dir.file ("forest.agexforest"));
+  agex::DetectorSettings settings = model->settings ();
+  settings.forest_bytes = fs::file_size (dir.file ("forest.agexforest"));
+  agex::DetectorModel (model->classifierPtr (), settings).save (dir.file ("fused.yml"));
+
+  const Scene scene = makeScene (cam, -0.04, 0.06, -0.03);
+  agex::BodyPartDetector<pcl::PointXYZ> original;
+  original.setModel (model);
+  original.setForest (forest);
+  original.setFocalLength (static_cast<float> (cam.fx), static_cast<float> (cam.fy));
+  original.setInputCloud (scene.cloud);
+  std::vector<agex::BodyPartDetection> a, b;
+  original.compute (a);
+
+  const auto loaded = agex::BodyPartDetector<pcl::PointXYZ>::fromModel (dir.file ("fused.yml"));
+  ASSERT_TRUE (loaded->getForest ()) << "fromModel did not load the model's forest";
+  loaded->setFocalLength (static_cast<float> (cam.fx), static_cast<float> (cam.fy));
+  loaded->setInputCloud (scene.cloud);
+  loaded->compute (b);
+  ASSERT_FALSE (a.empty ());
+  ASSERT_EQ (a.size (), b.size ());
+  for (std::size_t i = 0; i < a.size (); ++i)
+  {
+    EXPECT_EQ (a[i].part, b[i].part);
+    EXPECT_EQ (bits (a[i].confidence), bits (b[i].confidence)) << i;
+    EXPECT_EQ (a[i].u, b[i].u);
+    EXPECT_EQ (a[i].v, b[i].v);
+  }
+}
+
+TEST (FusedDetector, AModelTrainedAtOneResolutionScoresAtAnother)
+{
+  // The same field of view at 320x240 (training) and 640x480 (test): metric patches and
+  // depth-scaled forest offsets make the resting hand look the same.
+  const Camera low{262.5, 262.5, 159.5, 119.5, 320, 240};
+  const Camera high{525.0, 525.0, 319.5, 239.5, 640, 480};
+  const auto forest = handByDepthForest ();
+  const auto model = trainFused (low, forest);
+  for (const Camera &cam : {low, high})
+  {
+    SCOPED_TRACE (std::to_string (cam.width) + "x" + std::to_string (cam.height));
+    const Scene scene = makeScene (cam, 0.05, 0.08, 0.0);
+    agex::BodyPartDetector<pcl::PointXYZ> detector;
+    detector.setModel (model);
+    detector.setForest (forest);
+    detector.setFocalLength (static_cast<float> (cam.fx), static_cast<float> (cam.fy));
+    detector.setInputCloud (scene.cloud);
+    std::vector<agex::BodyPartDetection> detections;
+    detector.compute (detections);
+    float confidence = 0.f;
+    EXPECT_LE (handDistance (detections, scene.hand, &confidence), 0.1f);
+    EXPECT_GT (confidence, 0.5f);
+  }
+}
+}  // namespace

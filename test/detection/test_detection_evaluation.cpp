@@ -4,6 +4,7 @@
 #include <agex/common/pixel_box.h>
 #include <agex/detection/detection_evaluation.h>
 #include <agex/detection/detector_model.h>
+#include <agex/detection/person_evaluation.h>
 
 #include <gtest/gtest.h>
 
@@ -148,5 +149,56 @@ TEST (DetectorSettings, EveryPipelineSettingIsRangeCheckedWithItsKeyNamed)
   EXPECT_NO_THROW (params.validate ());
   params.mixed_window_radius = 1000000;
   EXPECT_THROW (params.validate (), std::invalid_argument);
+}
+}  // namespace
+
+namespace
+{
+TEST (PersonEvaluation, PeopleFoundByDistanceBandAndFiringOnNobody)
+{
+  // Person 1 at 1.5 m (its head found), person 2 at 3 m (nothing of it found), person 3 at
+  // 5 m (its foot found by a detection of the wrong class: not found).
+  auto label = [] (int person, agex::BodyPart part, float x, float z) {
+    agex::PartLabel l;
+    l.person = person;
+    l.part = part;
+    l.tip = Eigen::Vector3f (x, 0.f, z);
+    l.base = l.tip + Eigen::Vector3f (0.f, 0.2f, 0.f);
+    return l;
+  };
+  const std::vector<agex::PartLabel> labels{label (1, agex::BodyPart::Head, 0.f, 1.5f),
+                                            label (2, agex::BodyPart::Hand, 1.f, 3.f),
+                                            label (3, agex::BodyPart::Foot, -1.f, 5.f)};
+  auto detection = [] (agex::BodyPart part, float x, float z, int u, int v) {
+    agex::BodyPartDetection d;
+    d.part = part;
+    d.confidence = 0.9f;
+    d.position = Eigen::Vector3f (x, 0.f, z);
+    d.u = u, d.v = v;
+    return d;
+  };
+  cv::Mat persons (48, 64, CV_8UC1, cv::Scalar (0));
+  persons (cv::Rect (10, 10, 10, 10)) = 1;
+  const std::vector<agex::BodyPartDetection> detections{detection (agex::BodyPart::Head, 0.02f, 1.5f, 15, 15),
+                                                        detection (agex::BodyPart::Hand, -1.f, 5.f, 40, 40)};
+  agex::PersonEvaluation evaluation (0.1f);
+  evaluation.addFrame (detections, labels, &persons);
+  const nlohmann::json r = evaluation.report ();
+  EXPECT_EQ (r["persons"], 3);
+  EXPECT_DOUBLE_EQ (r["person_recall"].get<double> (), 1.0 / 3.0);
+  EXPECT_DOUBLE_EQ (r["person_recall_within_4m"].get<double> (), 0.5);
+  EXPECT_EQ (r["bands"][0]["persons"], 1);
+  EXPECT_DOUBLE_EQ (r["bands"][0]["ap"]["head"].get<double> (), 1.0);
+  EXPECT_DOUBLE_EQ (r["bands"][2]["ap"]["foot"].get<double> (), 0.0);
+  // The hand at pixel (40, 40) fires on nobody's surface; the head on person 1's does not.
+  EXPECT_DOUBLE_EQ (r["non_person_detections_per_frame"].get<double> (), 1.0);
+  // Split and merged again: the same report.
+  agex::PersonEvaluation a (0.1f), b (0.1f);
+  a.addFrame (detections, labels, &persons);
+  b.addFrame ({}, labels, nullptr);
+  a.merge (agex::PersonEvaluation::fromState (b.state (), "b"));
+  EXPECT_EQ (a.report ()["persons"], 6);
+  EXPECT_DOUBLE_EQ (a.report ()["person_recall"].get<double> (), 1.0 / 6.0);
+  EXPECT_DOUBLE_EQ (a.report ()["non_person_detections_per_frame"].get<double> (), 1.0);
 }
 }  // namespace

@@ -6,6 +6,7 @@
 #include <agex/common/statistics.h>
 #include <agex/detection/coverage_evaluation.h>
 #include <agex/detection/detection_evaluation.h>
+#include <agex/detection/person_evaluation.h>
 #include <agex/detection/part_label_training.h>
 #include <agex/classification/body_part_labeling.h>
 
@@ -158,14 +159,16 @@ namespace
 /** What agex_eval detect gathered over some frames, mergeable with another share's. */
 struct DetectionTally
 {
-  explicit DetectionTally (float radius) : evaluation (radius), candidates (radius) {}
+  explicit DetectionTally (float radius) : evaluation (radius), candidates (radius), persons (radius) {}
   agex::DetectionEvaluation evaluation;
   agex::CandidateCoverage candidates;
+  agex::PersonEvaluation persons;
   std::vector<double> frame_ms;
 
   nlohmann::json state () const
   {
-    return {{"evaluation", evaluation.state ()}, {"candidates", candidates.state ()}, {"frame_ms", frame_ms}};
+    return {{"evaluation", evaluation.state ()}, {"candidates", candidates.state ()}, {"persons", persons.state ()},
+            {"frame_ms", frame_ms}};
   }
   /** \throws std::invalid_argument naming source on a malformed state */
   void merge (const nlohmann::json &state, const std::string &source)
@@ -175,6 +178,9 @@ struct DetectionTally
       throw std::invalid_argument (source + ": \"state\" must hold evaluation, candidates and frame_ms");
     evaluation.merge (agex::DetectionEvaluation::fromState (state["evaluation"], source));
     candidates.merge (agex::CandidateCoverage::fromState (state["candidates"], source));
+    if (!state.contains ("persons"))
+      throw std::invalid_argument (source + ": \"state\" must hold persons");
+    persons.merge (agex::PersonEvaluation::fromState (state["persons"], source));
     for (const auto &ms : state["frame_ms"])
     {
       if (!ms.is_number () || !std::isfinite (ms.get<double> ()) || ms.get<double> () < 0.0)
@@ -206,6 +212,9 @@ tallyDetection (const DatasetSelection &selection, const LoadedDetector &loaded,
     tally.evaluation.addFrame (detections, selection.dataset.labelsOf (id));
     tally.candidates.addFrame (detector.getIntermediate ().interest_points, detector.getCandidates (),
                                selection.dataset.labelsOf (id));
+    const cv::Mat person_image =
+        selection.dataset.hasPersonLabels () ? selection.dataset.loadPersonLabels (id) : cv::Mat ();
+    tally.persons.addFrame (detections, selection.dataset.labelsOf (id), &person_image);
     progress.step (i + 1 - first);
   }
 }
@@ -221,6 +230,7 @@ reportDetection (const DetectionTally &tally, const nlohmann::json &about, const
   doc.update (about);
   doc["ms_per_frame_median"] = medianMs (tally.frame_ms);
   doc["candidate_coverage"] = tally.candidates.report ();
+  doc["people"] = tally.persons.report ();
   doc.update (extra);
   if (!json_path.empty ())
     writeJson (json_path, doc);

@@ -32,7 +32,8 @@ main (int argc, char **argv)
   agex::WeakPartLabelParams weak;
   std::vector<std::string> vector_flags;
   std::string mode, dataset_dir, json_path, plot_path, plots_dir, overlay_dir,
-      agex_model_path = AGEX_BUNDLED_MODEL, sw_model_path = AGEX_BUNDLED_SW_MODEL;
+      agex_model_path = AGEX_BUNDLED_AGEX_MODEL, sw_model_path = AGEX_BUNDLED_SW_MODEL,
+      fused_model_path = AGEX_BUNDLED_MODEL;
   float min_iou = 0.5f, radius = 0.10f;
   agex::SlidingWindowParams window_override{0, {}};
   int k = 5;
@@ -57,6 +58,8 @@ main (int argc, char **argv)
     ("model-agex", po::value (&agex_model_path)->default_value (agex_model_path), "compare: the AGEX model (default: the bundled model)")
     ("model-sw", po::value (&sw_model_path)->default_value (sw_model_path),
      "compare: the sliding-window model (default: the bundled one)")
+    ("model-fused", po::value (&fused_model_path)->default_value (fused_model_path),
+     "compare: the fused model beside them (default: the bundled detector; empty: none)")
     ("min-iou", po::value (&min_iou)->default_value (min_iou, "0.5"),
      "compare: box overlap (intersection over union) above which a detection matches a part")
     ("window-stride", po::value (&window_override.stride),
@@ -98,7 +101,7 @@ main (int argc, char **argv)
     const auto selection = agex::apps::selectDataset (dataset_dir, keyframes);
     agex::InputFiles read;
     read.addTree (selection.dataset.directory ());
-    for (const auto &model : {choice.model, agex_model_path, sw_model_path, choice.forest})
+    for (const auto &model : {choice.model, agex_model_path, sw_model_path, fused_model_path, choice.forest})
       if (!model.empty ())
         std::filesystem::is_directory (model) ? read.addTree (model) : read.add (model);
     if (!json_path.empty ())
@@ -113,7 +116,7 @@ main (int argc, char **argv)
     if (mode == "coverage")
       return agex::apps::evaluateCoverage (selection, params, k, radius, keyframes, details, json_path, plot_path);
     if (mode == "compare")
-      return agex::apps::compareDetectors (selection, agex_model_path, sw_model_path, window_override, radius, min_iou,
+      return agex::apps::compareDetectors (selection, agex_model_path, sw_model_path, fused_model_path, window_override, radius, min_iou,
                                            json_path, plots_dir);
     if (mode == "parts" && choice.forest.empty ())
       throw std::runtime_error ("agex_eval parts needs --forest");

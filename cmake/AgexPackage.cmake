@@ -19,6 +19,7 @@ install(FILES ${PROJECT_BINARY_DIR}/agexConfig.cmake ${PROJECT_BINARY_DIR}/agexC
   DESTINATION ${AGEX_INSTALL_CMAKEDIR})
 
 install(FILES ${PROJECT_SOURCE_DIR}/data/models/agex_bonn.yml ${PROJECT_SOURCE_DIR}/data/models/agex_bonn_sw.yml
+  ${PROJECT_SOURCE_DIR}/data/models/agex_bonn_agex.yml ${PROJECT_SOURCE_DIR}/data/models/agex_bonn_forest.agexforest
   ${PROJECT_SOURCE_DIR}/data/models/LICENSE.bonn-data DESTINATION ${CMAKE_INSTALL_DATADIR}/agex/models)
 if(TARGET agex_landmarks_lib)
   install(FILES ${PROJECT_SOURCE_DIR}/data/models/agex_contour_landmarks.dat

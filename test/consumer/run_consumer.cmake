@@ -55,7 +55,8 @@ if(NOT config)
 endif()
 get_filename_component(config_dir "${config}" DIRECTORY)
 foreach(file include/agex/keypoints/agex_keypoint.h include/agex/keypoints/impl/agex_keypoint.hpp
-             include/agex/io/frame_io.h bin/agex_detect share/agex/models/agex_bonn.yml)
+             include/agex/io/frame_io.h bin/agex_detect share/agex/models/agex_bonn.yml
+             share/agex/models/agex_bonn_agex.yml share/agex/models/agex_bonn_forest.agexforest)
   if(NOT EXISTS ${prefix}/${file})
     message(FATAL_ERROR "${file} was not installed")
   endif()
@@ -82,7 +83,7 @@ run(${CMAKE_COMMAND} -S ${AGEX_SOURCE_DIR}/doc/examples/find_body_parts -B ${WOR
     "-DCMAKE_CXX_FLAGS=${CXX_FLAGS}")
 run(${CMAKE_COMMAND} --build ${WORK_DIR}/build)
 run(${WORK_DIR}/build/find_body_parts ${prefix}/share/agex/frames/bonn_1_002.png
-    ${prefix}/share/agex/models/agex_bonn.yml)
+    ${prefix}/share/agex/models/agex_bonn_agex.yml ${prefix}/share/agex/models/agex_bonn.yml)
 message("${run_output}")
 foreach(expected "frame: 640 x 480 points" "AGEX points: [1-9]" ": head " "detection: head at pixel")
   if(NOT run_output MATCHES "${expected}")

@@ -55,6 +55,7 @@ bundledDataFile (const std::string &relative)
 
 const std::string kBundledModelFile = bundledDataFile ("models/agex_bonn.yml");
 const std::string kBundledFrameFile = bundledDataFile ("frames/bonn_1_002.png");
+const std::string kBundledAgexModelFile = bundledDataFile ("models/agex_bonn_agex.yml");
 const std::string kBundledSlidingWindowModelFile = bundledDataFile ("models/agex_bonn_sw.yml");
 const std::string kBundledLandmarkModelFile = bundledDataFile ("models/agex_contour_landmarks.dat");
 

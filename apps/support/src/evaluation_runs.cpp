@@ -381,9 +381,20 @@ mergeDetectionEvaluations (const std::vector<std::string> &parts, const std::str
 
 int
 compareDetectors (const DatasetSelection &selection, const std::string &agex_model_path,
-                  const std::string &sw_model_path, const agex::SlidingWindowParams &window_override,
-                  float radius, float min_iou, const std::string &json_path, const std::string &plots_dir)
+                  const std::string &sw_model_path, const std::string &fused_model_path,
+                  const agex::SlidingWindowParams &window_override, float radius, float min_iou,
+                  const std::string &json_path, const std::string &plots_dir)
 {
+  // The fused detector beside the paper's two (when a fused model is given).
+  agex::BodyPartDetector<pcl::PointXYZ>::Ptr fused_detector;
+  if (!fused_model_path.empty ())
+  {
+    fused_detector = agex::BodyPartDetector<pcl::PointXYZ>::fromModel (fused_model_path);
+    if (fused_detector->getModel ()->settings ().kind != agex::DetectorKind::Fused)
+      throw std::runtime_error (fused_model_path + " is not a fused model (train one with agex_train --fused)");
+    const auto &intr = selection.dataset.info ().intrinsics;
+    fused_detector->setFocalLength (static_cast<float> (intr.fx), static_cast<float> (intr.fy));
+  }
   const auto agex_model = std::make_shared<const agex::DetectorModel> (agex::DetectorModel::load (agex_model_path));
   agex_model->requireKind (agex::DetectorKind::Agex, agex_model_path);
   const auto sw_model = std::make_shared<const agex::DetectorModel> (agex::DetectorModel::load (sw_model_path));
@@ -401,7 +412,7 @@ compareDetectors (const DatasetSelection &selection, const std::string &agex_mod
   if (!(focal > 0.f))
     throw std::runtime_error (selection.dataset.directory () + ": the dataset has no focal length (intrinsics.fx)");
   constexpr int kContainmentK = 5;
-  Contender agex_side (min_iou, focal, radius), sw_side (min_iou, focal, radius);
+  Contender agex_side (min_iou, focal, radius), sw_side (min_iou, focal, radius), fused_side (min_iou, focal, radius);
   agex::CoverageEvaluation containment (kContainmentK, radius);
 
   Progress progress ("compared", selection.frame_ids.size ());
@@ -427,6 +438,14 @@ compareDetectors (const DatasetSelection &selection, const std::string &agex_mod
       if (stage == "agex")
         ms -= stage_ms;
     sw_side.add (windows_found, labels, ms, sw_detector.getPatchesClassified ());
+    if (fused_detector)
+    {
+      std::vector<agex::BodyPartDetection> fused_found;
+      start = std::chrono::steady_clock::now ();
+      fused_detector->setInputCloud (cloud);
+      fused_detector->compute (fused_found);
+      fused_side.add (fused_found, labels, agex::msSince (start), fused_detector->getPatchesClassified ());
+    }
     progress.step (i + 1);
   }
 
@@ -446,6 +465,11 @@ compareDetectors (const DatasetSelection &selection, const std::string &agex_mod
   doc["sliding_window"]["model"] = sw_model_path;
   doc["sliding_window"]["stride_px"] = sw_settings.sliding_window.stride;
   doc["sliding_window"]["scales"] = sw_settings.sliding_window.scales;
+  if (fused_detector)
+  {
+    doc["fused"] = fused_side.report ();
+    doc["fused"]["model"] = fused_model_path;
+  }
   for (int c = 0; c < agex::kBodyPartCount; ++c)
   {
     const auto part = static_cast<agex::BodyPart> (c);
@@ -460,10 +484,12 @@ compareDetectors (const DatasetSelection &selection, const std::string &agex_mod
     writeJson (json_path, doc);
 
   std::cout << selection.dataset.directory () << ": " << frames << " frames\n";
-  for (const auto *side : {&agex_side, &sw_side})
+  for (const auto *side : {&agex_side, &sw_side, &fused_side})
   {
+    if (side == &fused_side && !fused_detector)
+      continue;
     std::printf ("  %-14s %7.1f ms/frame %6.0f patches/frame  AP IoU>%.2f:",
-                 side == &agex_side ? "AGEX" : "sliding window", medianMs (side->frame_ms),
+                 side == &agex_side ? "AGEX" : side == &sw_side ? "sliding window" : "fused", medianMs (side->frame_ms),
                  side->patches / std::max<std::size_t> (1, frames), min_iou);
     for (const auto part : {agex::BodyPart::Head, agex::BodyPart::Hand, agex::BodyPart::Foot})
       std::printf (" %s %.3f", agex::bodyPartName (part), side->by_overlap.averagePrecision (part));
@@ -496,6 +522,9 @@ compareDetectors (const DatasetSelection &selection, const std::string &agex_mod
                           cv::Scalar (120, 120, 255));
       addPrecisionRecall (plot, sw_side.by_distance, part, std::string ("sliding window, ") + distance,
                           cv::Scalar (240, 190, 120));
+      if (fused_detector)
+        addPrecisionRecall (plot, fused_side.by_distance, part, std::string ("fused, ") + distance,
+                            cv::Scalar (40, 160, 40));
       writePng ((std::filesystem::path (plots_dir) / ("compare_" + std::string (agex::bodyPartName (part)) +
                                                                    ".png")).string (),
                             renderPlot (plot));

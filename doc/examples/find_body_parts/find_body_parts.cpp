@@ -4,11 +4,12 @@
 // (test/consumer), which also checks that its detections are agex_detect's, so the
 // tutorial's code cannot rot.
 //
-//   find_body_parts FRAME MODEL [PICTURES_DIR]
+//   find_body_parts FRAME AGEX_MODEL DETECTOR_MODEL [PICTURES_DIR]
 //
-// FRAME is a depth frame (.png, .u16 or organized .pcd), MODEL a model file such as
-// <prefix>/share/agex/models/agex_bonn.yml. With PICTURES_DIR, one PNG per step is written
-// there (the tutorial's pictures).
+// FRAME is a depth frame (.png, .u16 or organized .pcd), AGEX_MODEL an AGEX-point model such
+// as <prefix>/share/agex/models/agex_bonn_agex.yml (steps 5-6 use its classifier by hand),
+// DETECTOR_MODEL the detector of step 7 (<prefix>/share/agex/models/agex_bonn.yml, the fused
+// detector with its forest beside it). With PICTURES_DIR, one PNG per step is written there.
 
 #include <agex/classification/patch_classifier.h>
 #include <agex/detection/body_part_detector.h>
@@ -81,12 +82,12 @@ save (const std::string &dir, const std::string &name, const cv::Mat &image, dou
 int
 main (int argc, char **argv)
 {
-  if (argc < 3)
+  if (argc < 4)
   {
-    std::fprintf (stderr, "usage: %s FRAME MODEL [PICTURES_DIR]\n", argv[0]);
+    std::fprintf (stderr, "usage: %s FRAME AGEX_MODEL DETECTOR_MODEL [PICTURES_DIR]\n", argv[0]);
     return 2;
   }
-  const std::string pictures = argc > 3 ? argv[3] : "";
+  const std::string pictures = argc > 4 ? argv[4] : "";
   try
   {
     // Step 1: the frame. An 8-bit Bonn PNG holds depth in units of 16 mm; loadFrame
@@ -223,7 +224,7 @@ main (int argc, char **argv)
     // Step 7: all of the above in one class, with the settings stored in the model (the
     // spur depth scaled to the frame's resolution, the desk-top check of the floor, ...) and
     // several detections of one part within the suppression radius reduced to the best.
-    auto detector = agex::BodyPartDetector<pcl::PointXYZ>::fromModel (argv[2]);
+    auto detector = agex::BodyPartDetector<pcl::PointXYZ>::fromModel (argv[3]);
     detector->setInputCloud (cloud);
     std::vector<agex::BodyPartDetection> detections;
     detector->compute (detections);

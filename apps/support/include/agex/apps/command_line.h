@@ -25,6 +25,8 @@ std::string bundledDataFile (const std::string &relative);
 extern const std::string kBundledModelFile;
 /** bundledDataFile ("frames/bonn_1_002.png"), agex_bench's default frame (AGEX_BUNDLED_FRAME). */
 extern const std::string kBundledFrameFile;
+/** bundledDataFile ("models/agex_bonn_agex.yml"), the AGEX-point model (agex_eval compare's default). */
+extern const std::string kBundledAgexModelFile;
 /** bundledDataFile ("models/agex_bonn_sw.yml"), the sliding-window baseline's default model. */
 extern const std::string kBundledSlidingWindowModelFile;
 /** bundledDataFile ("models/agex_contour_landmarks.dat"), agex_landmarks' default model. */

@@ -36,10 +36,12 @@ int evaluateDetection (const DatasetSelection &selection, const LoadedDetector &
 int mergeDetectionEvaluations (const std::vector<std::string> &parts, const std::string &json_path,
                                const std::string &plots_dir);
 
-/** agex_eval compare: the AGEX detector against the sliding-window baseline (the paper's Fig. 7). */
+/** agex_eval compare: the AGEX detector against the sliding-window baseline (the paper's Fig. 7),
+  * and the fused detector beside them when fused_model_path is not empty. */
 int compareDetectors (const DatasetSelection &selection, const std::string &agex_model_path,
-                      const std::string &sw_model_path, const SlidingWindowParams &window_override, float radius,
-                      float min_iou, const std::string &json_path, const std::string &plots_dir);
+                      const std::string &sw_model_path, const std::string &fused_model_path,
+                      const SlidingWindowParams &window_override, float radius, float min_iou,
+                      const std::string &json_path, const std::string &plots_dir);
 
 /** agex_eval parts: the forest's per-pixel labels against exact (part-label images) or weak
   * classes, on the pixels the model's pipeline keeps; part maps into overlay_dir. */

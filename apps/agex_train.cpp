@@ -11,6 +11,7 @@
 
 #include <boost/program_options.hpp>
 
+#include <algorithm>
 #include <chrono>
 #include <filesystem>
 #include <iostream>
@@ -27,7 +28,7 @@ main (int argc, char **argv)
   agex::PatchGeometry patch{41, 0.6f, 0.3f};
   agex::PatchClassifierParams classifier_params;
   agex::apps::TrainingChoice choice;
-  std::vector<std::string> vector_flags, datasets;
+  std::vector<std::string> vector_flags, datasets, dataset_forests;
   std::string out, forest_path;
   bool sliding_window = false, fused = false;
 
@@ -67,6 +68,9 @@ main (int argc, char **argv)
   po::options_description fusion ("Fused detector (AGEX points and a forest's part modes)");
   fusion.add_options () ("fused", po::bool_switch (&fused), "train the fused detector (needs --forest)")
     ("forest", po::value (&forest_path), "the body-part forest (an agex forest file) whose features it learns")
+    ("dataset-forest", po::value (&dataset_forests)->multitoken (),
+     "DIR[@SEQ,...]=FOREST: the frames of that --dataset are labelled by FOREST (one trained without them) "
+     "instead of --forest, so the classifier sees the forest as on new frames (cross-fitting)")
     ("forest-stride", po::value (&settings.forest_stride)->default_value (settings.forest_stride),
      "pixel stride of the forest pass (stored in the model)")
     ("merge-radius", po::value (&settings.fused.merge_radius)->default_value (settings.fused.merge_radius, "0.03"),
@@ -94,7 +98,17 @@ main (int argc, char **argv)
       const fs::path dir = fs::absolute (out).parent_path ();
       settings.forest_file = fs::relative (fs::absolute (forest_path), dir).string ();
       settings.forest_bytes = fs::file_size (forest_path);
+      for (const auto &pair : dataset_forests)
+      {
+        const auto eq = pair.rfind ('=');
+        if (eq == std::string::npos || std::find (datasets.begin (), datasets.end (), pair.substr (0, eq)) == datasets.end ())
+          throw std::runtime_error ("--dataset-forest " + pair + ": expected DIR[@SEQ,...]=FOREST with a DIR[@SEQ,...] "
+                                    "given as --dataset");
+        choice.dataset_forests[pair.substr (0, eq)] = agex::BodyPartForest::load (pair.substr (eq + 1));
+      }
     }
+    else if (!dataset_forests.empty ())
+      throw std::runtime_error ("--dataset-forest is for --fused");
     settings.validate ([] (const std::string &key) {
       return key.rfind ("pipeline.", 0) == 0 ? agex::apps::pipelineFlagName (key.substr (9)) : "setting " + key;
     });
@@ -115,6 +129,8 @@ main (int argc, char **argv)
       read.addTree (agex::apps::selectDataset (spec, false).dataset.directory ());
     if (!forest_path.empty ())
       read.add (forest_path);
+    for (const auto &pair : dataset_forests)
+      read.add (pair.substr (pair.rfind ('=') + 1));
     read.checkOutput (out);
     classifier_params.dictionary.seed = choice.seed;
 

@@ -31,6 +31,31 @@ cellKey (int i, int j, int k)
   return (b (i) << 42) | (b (j) << 21) | b (k);
 }
 
+/** The samples' indices grouped by cubic cell of the given size: cells in key order, each
+  * cell's indices ascending. */
+std::vector<std::vector<int>>
+groupByCell (const std::vector<Sample> &samples, float size)
+{
+  std::vector<std::pair<std::int64_t, int>> keyed;
+  keyed.reserve (samples.size ());
+  for (std::size_t i = 0; i < samples.size (); ++i)
+  {
+    const Eigen::Vector3f &x = samples[i].x;
+    keyed.emplace_back (cellKey (static_cast<int> (std::floor (x.x () / size)), static_cast<int> (std::floor (x.y () / size)),
+                                 static_cast<int> (std::floor (x.z () / size))),
+                        static_cast<int> (i));
+  }
+  std::sort (keyed.begin (), keyed.end ());
+  std::vector<std::vector<int>> cells;
+  for (std::size_t i = 0; i < keyed.size (); ++i)
+  {
+    if (i == 0 || keyed[i].first != keyed[i - 1].first)
+      cells.emplace_back ();
+    cells.back ().push_back (keyed[i].second);
+  }
+  return cells;
+}
+
 /** Points hashed into cubic cells of a given size. */
 class Grid
 {
@@ -109,6 +134,18 @@ PartModeEstimation::compute (const pcl::PointCloud<BodyPartLabelPoint> &labels, 
   if (body_count == 0)
     return true;
   const Eigen::Vector3f body_centroid = (body_sum / static_cast<double> (body_count)).cast<float> ();
+  // The body's pixels in cells of the contact radius, for every mode's base below.
+  std::vector<Sample> body_points;
+  body_points.reserve (body.size ());
+  std::vector<int> body_slot (labels.size (), -1);
+  for (const int i : body)
+  {
+    body_slot[static_cast<std::size_t> (i)] = static_cast<int> (body_points.size ());
+    body_points.push_back ({labels[static_cast<std::size_t> (i)].getVector3fMap (), 0.f, 0.f, i});
+  }
+  const Grid body_grid (body_points, P.contact_radius);
+  std::vector<unsigned> support_stamp (body_points.size (), 0u), touched_stamp (body_points.size (), 0u);
+  unsigned visit_stamp = 0;
   const float pixel_area = 1.f / (P.fx * P.fy);
 
   for (int part = 0; part < kLabelPartCount; ++part)
@@ -126,17 +163,26 @@ PartModeEstimation::compute (const pcl::PointCloud<BodyPartLabelPoint> &labels, 
     }
     if (samples.empty ())
       continue;
-    const Grid kernel_grid (samples, 3.f * b);
-    // Seeds: one per bandwidth cell, in key order (deterministic).
-    std::map<std::int64_t, std::vector<int>> seed_cells;
+    // The density is summed over atoms, not pixels: the samples' weighted means in cells a
+    // quarter of the bandwidth wide. A kernel that wide hardly changes across a cell, and the
+    // cost no longer grows with the resolution (a 640x480 hand has ten times a 144x176 one's
+    // pixels, not ten times its atoms).
+    std::vector<Sample> atoms;
+    for (const auto &cell : groupByCell (samples, 0.25f * b))
     {
-      const Grid coarse (samples, b);
-      for (std::size_t i = 0; i < samples.size (); ++i)
+      Eigen::Vector3d sum = Eigen::Vector3d::Zero ();
+      double w = 0.0;
+      for (const int i : cell)
       {
-        const Eigen::Vector3i c = coarse.coords (samples[i].x);
-        seed_cells[cellKey (c.x (), c.y (), c.z ())].push_back (static_cast<int> (i));
+        sum += samples[static_cast<std::size_t> (i)].x.cast<double> () * samples[static_cast<std::size_t> (i)].w;
+        w += samples[static_cast<std::size_t> (i)].w;
       }
+      if (w > 0.0)
+        atoms.push_back ({(sum / w).cast<float> (), static_cast<float> (w), 0.f, -1});
     }
+    const Grid kernel_grid (atoms, 3.f * b);
+    // Seeds: one per bandwidth cell, in key order (deterministic).
+    const std::vector<std::vector<int>> seed_cells = groupByCell (samples, b);
     struct Found
     {
       Eigen::Vector3f x;
@@ -148,7 +194,7 @@ PartModeEstimation::compute (const pcl::PointCloud<BodyPartLabelPoint> &labels, 
     {
       Eigen::Vector3d seed = Eigen::Vector3d::Zero ();
       double wsum = 0.0;
-      for (const int s : cell.second)
+      for (const int s : cell)
       {
         seed += samples[s].x.cast<double> () * samples[s].w;
         wsum += samples[s].w;
@@ -158,12 +204,12 @@ PartModeEstimation::compute (const pcl::PointCloud<BodyPartLabelPoint> &labels, 
       {
         Eigen::Vector3d num = Eigen::Vector3d::Zero ();
         double den = 0.0;
-        kernel_grid.around (x, [&] (int s) {
-          const float d2 = (samples[s].x - x).squaredNorm ();
+        kernel_grid.around (x, [&] (int a) {
+          const float d2 = (atoms[a].x - x).squaredNorm ();
           if (d2 > cut2)
             return;
-          const double k = samples[s].w * std::exp (-d2 * inv_b2);
-          num += samples[s].x.cast<double> () * k;
+          const double k = atoms[a].w * std::exp (-d2 * inv_b2);
+          num += atoms[a].x.cast<double> () * k;
           den += k;
         });
         if (!(den > 0.0))
@@ -173,12 +219,15 @@ PartModeEstimation::compute (const pcl::PointCloud<BodyPartLabelPoint> &labels, 
         x = next;
         if (step < P.convergence)
           break;
+        // A path that reaches a mode already found ends there: it would climb the same hill.
+        if (std::any_of (found.begin (), found.end (), [&] (const Found &f) { return (f.x - x).norm () < 0.1f * b; }))
+          break;
       }
       auto same = std::find_if (found.begin (), found.end (), [&] (const Found &f) { return (f.x - x).norm () < 0.5f * b; });
       if (same == found.end ())
-        found.push_back ({x, cell.second});
+        found.push_back ({x, cell});
       else
-        same->samples.insert (same->samples.end (), cell.second.begin (), cell.second.end ());
+        same->samples.insert (same->samples.end (), cell.begin (), cell.end ());
     }
 
     std::vector<PartMode> part_modes;
@@ -207,31 +256,28 @@ PartModeEstimation::compute (const pcl::PointCloud<BodyPartLabelPoint> &labels, 
       // The base: where the part touches the rest of the body (the labelled pixels outside the
       // support within contact_radius of a supporting pixel: the wrist, the neck, the ankle, a
       // hip the hand rests on), else the body's centroid.
-      Grid support_grid (samples, P.contact_radius);
-      std::vector<std::uint8_t> in_support (samples.size (), 0);
-      for (const int si : f.samples)
-        in_support[si] = 1;
-      Eigen::Vector3d base_sum = Eigen::Vector3d::Zero ();
-      std::size_t base_count = 0;
+      // Searched from the support outwards (the body pixels in the cells around each
+      // supporting pixel), then summed in body order: the same sum as testing every body pixel.
+      ++visit_stamp;
+      for (const int s : f.samples)
+        support_stamp[static_cast<std::size_t> (body_slot[static_cast<std::size_t> (samples[s].index)])] = visit_stamp;
+      std::vector<int> touching;
       const float r2 = P.contact_radius * P.contact_radius;
-      for (const int i : body)
-      {
-        // The rest of the body: every labelled pixel that does not support this mode (other
-        // parts, and this part's pixels of other modes).
-        if (std::binary_search (m.support.begin (), m.support.end (), i))
-          continue;
-        const auto &q = labels[static_cast<std::size_t> (i)];
-        const Eigen::Vector3f x = q.getVector3fMap ();
-        bool touches = false;
-        support_grid.around (x, [&] (int si) {
-          touches = touches || (in_support[si] && (samples[si].x - x).squaredNorm () <= r2);
+      for (const int s : f.samples)
+        body_grid.around (samples[s].x, [&] (int bj) {
+          const auto j = static_cast<std::size_t> (bj);
+          if (support_stamp[j] != visit_stamp && touched_stamp[j] != visit_stamp &&
+              (body_points[j].x - samples[s].x).squaredNorm () <= r2)
+          {
+            touched_stamp[j] = visit_stamp;
+            touching.push_back (bj);
+          }
         });
-        if (touches)
-        {
-          base_sum += x.cast<double> ();
-          ++base_count;
-        }
-      }
+      std::sort (touching.begin (), touching.end ());
+      Eigen::Vector3d base_sum = Eigen::Vector3d::Zero ();
+      const std::size_t base_count = touching.size ();
+      for (const int bj : touching)
+        base_sum += body_points[static_cast<std::size_t> (bj)].x.cast<double> ();
       const Eigen::Vector3f base = base_count ? (base_sum / static_cast<double> (base_count)).cast<float> () : body_centroid;
       Eigen::Vector3f away = m.position - base;
       Eigen::Matrix3d cov = Eigen::Matrix3d::Zero ();

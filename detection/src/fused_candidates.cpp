@@ -3,6 +3,7 @@
 #include <agex/classification/body_part_labeling.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <limits>
 #include <sstream>
@@ -56,8 +57,10 @@ nearestPixel (const pcl::PointCloud<pcl::PointXYZ> &cloud, const pcl::Indices &s
 
 bool
 labelPersonParts (const DepthPipelineResult &prepared, const BodyPartForest::ConstPtr &forest, float fx, float fy,
-                  int stride, pcl::PointCloud<BodyPartLabelPoint> &labels, std::vector<PartMode> &modes)
+                  int stride, pcl::PointCloud<BodyPartLabelPoint> &labels, std::vector<PartMode> &modes,
+                  std::pair<double, double> *ms)
 {
+  const auto start = std::chrono::steady_clock::now ();
   labels.clear ();
   modes.clear ();
   if (!forest || !prepared.filtered || prepared.meshes.empty () || !(fx > 0.f) || !(fy > 0.f))
@@ -71,12 +74,17 @@ labelPersonParts (const DepthPipelineResult &prepared, const BodyPartForest::Con
   labeling.setStride (stride);
   if (!labeling.compute (labels))
     return false;
+  const auto labelled = std::chrono::steady_clock::now ();
   PartModeEstimation estimation;
   PartModeParams params;
   params.fx = fx;
   params.fy = fy;
   estimation.setParams (params);
-  return estimation.compute (labels, modes);
+  const bool found = estimation.compute (labels, modes);
+  if (ms)
+    *ms = {std::chrono::duration<double, std::milli> (labelled - start).count (),
+           std::chrono::duration<double, std::milli> (std::chrono::steady_clock::now () - labelled).count ()};
+  return found;
 }
 
 void

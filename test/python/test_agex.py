@@ -222,8 +222,9 @@ def test_agex_keypoints_as_the_app_gives_them(tmp_path):
         agex.agex_keypoints(agex.load_frame(FRAME), kk=3)
     with pytest.raises(ValueError, match="pipeline.k"):
         agex.agex_keypoints(agex.load_frame(FRAME), k=0)
-    # A narrower crop box (a numpy array is a list): every point inside it.
-    crop = agex.agex_keypoints(agex.load_frame(FRAME), crop_min=np.array([0.0, -1.5, 1.3]))
+    # A narrower crop box (a numpy array is a list; the box is off unless asked for): every
+    # point inside it.
+    crop = agex.agex_keypoints(agex.load_frame(FRAME), use_crop_box=True, crop_min=np.array([0.0, -1.5, 1.3]))
     assert crop and all(p["position"][0] >= 0.0 for p in crop)
     assert any(p["position"][0] < 0.0 for p in agex.agex_keypoints(agex.load_frame(FRAME)))
 

@@ -45,7 +45,9 @@ collectTrainingExamples (const std::vector<std::string> &datasets, const Trainin
       {
         pcl::PointCloud<BodyPartLabelPoint> part_labels;
         std::vector<PartMode> modes;
-        labelPersonParts (prepared, choice.forest, fx, fy, settings.forest_stride, part_labels, modes);
+        const auto own = choice.dataset_forests.find (spec);
+        labelPersonParts (prepared, own != choice.dataset_forests.end () ? own->second : choice.forest, fx, fy,
+                          settings.forest_stride, part_labels, modes);
         collectFusedTrainingSamples (prepared, part_labels, modes, fx, settings.pipeline.up, settings.fused, labels,
                                      choice.radius, geometry, patches, auxiliary, classes);
         break;

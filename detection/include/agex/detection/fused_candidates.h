@@ -25,9 +25,11 @@ namespace agex
 /** \brief Labels the pixels of the pipeline's meshes (the person) with a forest
   * (agex::BodyPartLabeling, focal lengths fx, fy, the given pixel stride) and finds the part
   * modes (agex::PartModeEstimation): what the forest mode and the fused detector start from.
+  * With ms, the milliseconds of the two steps are stored there (labelling, modes).
   * \return false (labels and modes empty) without meshes, a forest or a focal length */
 bool labelPersonParts (const DepthPipelineResult &prepared, const BodyPartForest::ConstPtr &forest, float fx, float fy,
-                       int stride, pcl::PointCloud<BodyPartLabelPoint> &labels, std::vector<PartMode> &modes);
+                       int stride, pcl::PointCloud<BodyPartLabelPoint> &labels, std::vector<PartMode> &modes,
+                       std::pair<double, double> *ms = nullptr);
 
 /** Where a candidate came from (bits). */
 enum FusedCandidateSource : unsigned

@@ -8,6 +8,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <map>
 #include <string>
 #include <vector>
 
@@ -27,6 +28,10 @@ struct TrainingChoice
   bool keyframes = false;
   std::uint64_t seed = 1;
   BodyPartForest::ConstPtr forest;  ///< fused: the forest whose features the classifier learns
+  /** Fused: the forest that labels the frames of a dataset argument (DIR[@SEQ,...], as given)
+    * instead of `forest`: one trained without those frames, so that the classifier learns how
+    * far to trust the forest on frames it has not seen (cross-fitting). */
+  std::map<std::string, BodyPartForest::ConstPtr> dataset_forests;
 };
 
 /** The examples of every labelled frame of the datasets (DIR[@SEQ,...]), with a progress line

@@ -44,6 +44,20 @@ struct PersonInfo
   unsigned border = 0;      ///< Border bits
 };
 
+namespace detail
+{
+// The steps' shared state and working types, defined in impl/person_segmentation.hpp.
+struct PersonScan;
+struct PersonGridCell;
+struct PersonPart;
+struct PersonPartStats;
+struct PersonCandidate;
+struct PersonCut;
+struct PersonBlocks;
+struct PersonPixels;
+enum class PersonVerdict;
+}  // namespace detail
+
 /** \brief Finds the people in an organized depth frame: one pcl::PointIndices per person.
   *
   * The input is an organized cloud, raw or already cleaned (mixed pixels removed,
@@ -290,6 +304,52 @@ protected:
 
 private:
   bool validParameters () const;
+  bool validInput () const;
+
+  // The steps of segment (), in order (the class comment's numbers); each hands on what it
+  // found in a detail::PersonScan.
+  bool usable (const detail::PersonScan &scan, int i) const;
+  void estimateFocalLengths (detail::PersonScan &scan) const;
+  bool buildCoarseGrid (detail::PersonScan &scan) const;
+  pcl::IndicesPtr levelCells (const detail::PersonScan &scan) const;
+  void findFloor (detail::PersonScan &scan);
+  void placeCells (detail::PersonScan &scan) const;
+  void clusterCells (detail::PersonScan &scan) const;
+  void findCandidates (const detail::PersonScan &scan, std::vector<detail::PersonCandidate> &people,
+                       std::vector<detail::PersonCandidate> &leftovers) const;
+  bool splitAtHeads (const detail::PersonScan &scan, const detail::PersonPart &part,
+                     const detail::PersonPartStats &s, detail::PersonPart &left, detail::PersonPart &right) const;
+  std::vector<detail::PersonCut> headCuts (const detail::PersonScan &scan, const detail::PersonPartStats &s) const;
+  void mergePersonLike (const detail::PersonScan &scan, std::vector<detail::PersonCandidate> &people) const;
+  void mergePieces (detail::PersonScan &scan, std::vector<detail::PersonCandidate> &people,
+                    std::vector<detail::PersonCandidate> &leftovers) const;
+  int nearestPerson (const std::vector<detail::PersonPartStats> &own, const detail::PersonPartStats &piece,
+                     const std::vector<unsigned char> &touches) const;
+  void takePixels (const detail::PersonScan &scan, const std::vector<detail::PersonCandidate> &people,
+                   pcl::PointCloud<pcl::Label> &labels, std::vector<detail::PersonPixels> &pixels) const;
+  void personPixels (const detail::PersonScan &scan, const std::vector<detail::PersonPart> &parts, int k,
+                     bool bounded, const detail::PersonBlocks &blocks, pcl::PointCloud<pcl::Label> &labels,
+                     detail::PersonPixels &out) const;
+  void describePersons (const detail::PersonScan &scan, const std::vector<detail::PersonCandidate> &people,
+                        std::vector<detail::PersonPixels> &pixels, pcl::PointCloud<pcl::Label> &labels,
+                        std::vector<pcl::PointIndices> &persons);
+  PersonInfo personInfo (const detail::PersonScan &scan, const detail::PersonCandidate &person, int k,
+                         const detail::PersonPixels &pixels) const;
+
+  // The rules the steps share: connection, statistics and the verdict on a set of parts.
+  float floorMargin (float z) const;
+  bool connected (const detail::PersonScan &scan, const detail::PersonGridCell &a, const detail::PersonGridCell &b,
+                  bool diagonal) const;
+  void measure (const detail::PersonScan &scan, const std::vector<detail::PersonPart> &parts,
+                detail::PersonPartStats &s) const;
+  void measureBins (const detail::PersonScan &scan, const std::vector<detail::PersonPart> &parts,
+                    detail::PersonPartStats &s) const;
+  void countVerticalNeighbour (const detail::PersonScan &scan, const detail::PersonPart &part, int c, int rows,
+                               bool no_data_counts, int &seen, int &counted) const;
+  void outline (const detail::PersonScan &scan, const std::vector<detail::PersonPart> &parts,
+                detail::PersonPartStats &s) const;
+  detail::PersonVerdict verdict (const detail::PersonScan &scan, const std::vector<detail::PersonPart> &parts,
+                                 detail::PersonPartStats &s) const;
 
   Eigen::Vector4f given_floor_ = Eigen::Vector4f::Zero ();
   bool floor_given_ = false;

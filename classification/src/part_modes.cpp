@@ -110,10 +110,10 @@ PartModeEstimation::compute (const pcl::PointCloud<BodyPartLabelPoint> &labels, 
     }
   if (!(P.fx > 0.f) || !(P.fy > 0.f) || !std::isfinite (P.fx) || !std::isfinite (P.fy) || P.max_iterations < 1 ||
       !(P.convergence > 0.f) || !(P.contact_radius > 0.f) || !std::isfinite (P.probability_threshold) ||
-      !(P.elongation >= 1.f) || P.min_support < 1)
+      !(P.elongation >= 1.f) || P.min_support < 1 || P.pixel_step < 1 || P.pixel_step > 64)
   {
     PCL_ERROR ("[agex::PartModeEstimation::compute] Invalid parameters (focal lengths, iterations, convergence, "
-               "contact radius, threshold, elongation >= 1, min support >= 1).\n");
+               "contact radius, threshold, elongation >= 1, min support >= 1, pixel step 1-64).\n");
     return false;
   }
 
@@ -121,8 +121,12 @@ PartModeEstimation::compute (const pcl::PointCloud<BodyPartLabelPoint> &labels, 
   Eigen::Vector3d body_sum = Eigen::Vector3d::Zero ();
   std::size_t body_count = 0;
   std::vector<int> body;
+  const std::size_t width = labels.width, step = static_cast<std::size_t> (P.pixel_step);
+  const bool stepped = step > 1 && labels.isOrganized () && width > 0;
   for (std::size_t i = 0; i < labels.size (); ++i)
   {
+    if (stepped && ((i % width) % step != 0 || (i / width) % step != 0))
+      continue;
     const auto &q = labels[i];
     if (q.label >= 0 && std::isfinite (q.x) && std::isfinite (q.y) && std::isfinite (q.z))
     {
@@ -146,7 +150,7 @@ PartModeEstimation::compute (const pcl::PointCloud<BodyPartLabelPoint> &labels, 
   const Grid body_grid (body_points, P.contact_radius);
   std::vector<unsigned> support_stamp (body_points.size (), 0u), touched_stamp (body_points.size (), 0u);
   unsigned visit_stamp = 0;
-  const float pixel_area = 1.f / (P.fx * P.fy);
+  const float pixel_area = (stepped ? static_cast<float> (step * step) : 1.f) / (P.fx * P.fy);
 
   for (int part = 0; part < kLabelPartCount; ++part)
   {

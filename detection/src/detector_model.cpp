@@ -51,9 +51,9 @@ DetectorSettings::validate (const std::function<std::string (const std::string &
     fused.validate ([&name] (const std::string &key) { return name ("fused." + key); });
     if (forest_file.empty () || forest_file.size () > 4096)
       throw std::invalid_argument (name ("fused.forest") + " must name the forest the model was trained with");
-    if (forest_stride < 1 || forest_stride > 8)
+    if (forest_stride < 0 || forest_stride > 8)
       throw std::invalid_argument (name ("fused.forest_stride") + " is " + std::to_string (forest_stride) +
-                                   ", outside [1, 8]");
+                                   ", outside [0, 8] (0: by the focal length)");
   }
   if (kind == DetectorKind::SlidingWindow)
   {

@@ -55,6 +55,16 @@ nearestPixel (const pcl::PointCloud<pcl::PointXYZ> &cloud, const pcl::Indices &s
 }
 }  // namespace
 
+int
+forestStrideFor (int stride, float fx)
+{
+  if (stride > 0)
+    return stride;
+  if (!(fx > 0.f) || !std::isfinite (fx))
+    return 1;
+  return std::clamp (static_cast<int> (std::floor (fx / 250.f)), 1, 8);
+}
+
 bool
 labelPersonParts (const DepthPipelineResult &prepared, const BodyPartForest::ConstPtr &forest, float fx, float fy,
                   int stride, pcl::PointCloud<BodyPartLabelPoint> &labels, std::vector<PartMode> &modes,
@@ -71,6 +81,7 @@ labelPersonParts (const DepthPipelineResult &prepared, const BodyPartForest::Con
   labeling.setIndices (std::make_shared<pcl::Indices> (body.begin (), body.end ()));
   labeling.setForest (forest);
   labeling.setFocalLength (fx, fy);
+  stride = forestStrideFor (stride, fx);
   labeling.setStride (stride);
   if (!labeling.compute (labels))
     return false;
@@ -79,6 +90,7 @@ labelPersonParts (const DepthPipelineResult &prepared, const BodyPartForest::Con
   PartModeParams params;
   params.fx = fx;
   params.fy = fy;
+  params.pixel_step = stride;  // the representatives only: the other pixels copy them
   estimation.setParams (params);
   const bool found = estimation.compute (labels, modes);
   if (ms)

@@ -318,8 +318,8 @@ public:
     if (mode && *mode != "model" && *mode != "forest")
       throw std::invalid_argument ("mode must be 'model' (the model's classifier) or 'forest' (the forest's part "
                                    "modes alone); got '" + *mode + "'");
-    if (forest_stride < 1 || forest_stride > 8)
-      throw std::invalid_argument ("forest_stride must lie in [1, 8]");
+    if (forest_stride < 0 || forest_stride > 8)
+      throw std::invalid_argument ("forest_stride must lie in [0, 8] (0: by the focal length)");
     mode_ = mode && *mode == "forest" ? agex::DetectorMode::Forest : agex::DetectorMode::Model;
     forest_stride_ = forest_stride;
     py::gil_scoped_release release;

@@ -26,10 +26,10 @@ detectorOptionsDescription (DetectorChoice &choice, const std::string &model_def
      "per-pixel body-part forest: an agex forest file, a PCL tree file (.txt, .txt.bz2) or a directory of them "
      "(e.g. ../shared/data/pcl_people)")
     ("forest-stride", po::value (&choice.forest_stride)->default_value (choice.forest_stride)->notifier ([] (int v) {
-       if (v < 1 || v > 8)
-         throw std::runtime_error ("--forest-stride must lie in [1, 8]");
+       if (v < 0 || v > 8)
+         throw std::runtime_error ("--forest-stride must lie in [0, 8]");
      }),
-     "forest: one evaluated pixel per stride x stride cell");
+     "forest: one evaluated pixel per stride x stride cell (0: by the focal length, 2 at 640x480)");
   return desc;
 }
 

@@ -557,7 +557,7 @@ evaluatePartLabels (const DatasetSelection &selection, const LoadedDetector &loa
       labeling.setIndices (std::make_shared<pcl::Indices> (frame.body));
       labeling.setForest (loaded.forest);
       labeling.setFocalLength (static_cast<float> (intr.fx), static_cast<float> (intr.fy));
-      labeling.setStride (loaded.forest_stride);
+      labeling.setStride (forestStrideFor (loaded.forest_stride, static_cast<float> (intr.fx)));
       pcl::PointCloud<BodyPartLabelPoint> labels;
       if (!labeling.compute (labels))
         throw std::runtime_error (id + ": labelling failed");

@@ -62,6 +62,10 @@ struct PartModeParams
   float elongation = 1.5f;
   /** Modes with fewer supporting pixels are dropped. */
   int min_support = 3;
+  /** Organized clouds: only the pixels at multiples of pixel_step in both image axes are
+    * samples, each standing for pixel_step^2 pixels (the representatives of a forest pass at
+    * that stride; the others only copy them). 1: every pixel. */
+  int pixel_step = 1;
 };
 
 /** \brief Finds part modes in a label cloud (any cloud of BodyPartLabelPoint; organized or

@@ -45,7 +45,7 @@ struct DetectorSettings
   FusedCandidateParams fused;
   std::string forest_file;
   std::uint64_t forest_bytes = 0;
-  int forest_stride = 1;  ///< pixel stride of the forest pass, 1-8
+  int forest_stride = 0;  ///< pixel stride of the forest pass, 1-8; 0: by the focal length (agex::forestStrideFor)
 
   /** \throws std::invalid_argument naming the setting (name (key)) out of range */
   void validate (const std::function<std::string (const std::string &key)> &name) const;

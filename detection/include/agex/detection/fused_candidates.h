@@ -24,12 +24,20 @@ namespace agex
 {
 /** \brief Labels the pixels of the pipeline's meshes (the person) with a forest
   * (agex::BodyPartLabeling, focal lengths fx, fy, the given pixel stride) and finds the part
-  * modes (agex::PartModeEstimation): what the forest mode and the fused detector start from.
+  * modes (agex::PartModeEstimation, over the stride's representative pixels): what the forest
+  * mode and the fused detector start from. stride 0: forestStrideFor (0, fx).
   * With ms, the milliseconds of the two steps are stored there (labelling, modes).
   * \return false (labels and modes empty) without meshes, a forest or a focal length */
 bool labelPersonParts (const DepthPipelineResult &prepared, const BodyPartForest::ConstPtr &forest, float fx, float fy,
                        int stride, pcl::PointCloud<BodyPartLabelPoint> &labels, std::vector<PartMode> &modes,
                        std::pair<double, double> *ms = nullptr);
+
+/** \brief The forest's pixel stride for a camera of focal length fx (pixels): stride itself
+  * when positive; 0 (auto) gives one evaluated pixel per cell of about 4 mm at 1 m
+  * (floor (fx / 250), at least 1, at most 8): 1 at 144x176 (fx 210), 2 at 640x480 (525), 4 at
+  * 1280x960, so that the forest's and the part modes' work per person stays about the same
+  * whatever the resolution. */
+int forestStrideFor (int stride, float fx);
 
 /** Where a candidate came from (bits). */
 enum FusedCandidateSource : unsigned

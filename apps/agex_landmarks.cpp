@@ -4,24 +4,22 @@
 
 #include <agex/apps/command_line.h>
 #include <agex/apps/landmarks.h>
-#include <agex/apps/output.h>
-#include <agex/io/atomic_file.h>
+#include <agex/landmarks/image_files.h>
+#include <agex/landmarks/people_landmarks.h>
 
 #include <boost/program_options.hpp>
 #include <opencv2/imgcodecs.hpp>
 
-#include <algorithm>
 #include <iostream>
 
 namespace po = boost::program_options;
-using agex::apps::LandmarkedFrame;
 
 int
 main (int argc, char **argv)
 {
   std::vector<std::string> inputs;
   std::string model_path = AGEX_BUNDLED_LANDMARK_MODEL, json_path, lines_path, overlay_path, video;
-  agex::apps::DetectorChoice detector_choice;
+  agex::apps::PeopleDetectorChoice detector_choice;
   double threshold = 0.0;
   int max_frames = 0, repeat = 1;
   po::options_description options ("agex_landmarks INPUT... [options]\nPeople boxes and 180 body-contour landmarks per person");
@@ -48,37 +46,22 @@ main (int argc, char **argv)
       throw std::runtime_error ("no INPUT image or --video given (see --help)");
     if (repeat < 1 || max_frames < 0)
       throw std::runtime_error ("--repeat must be at least 1, --max-frames 0 (all) or more");
-    if (!overlay_path.empty ())
-      agex::apps::checkNotInImageSequence (overlay_path, video);
-    std::vector<std::string> read = inputs;
-    read.push_back (model_path);
-    if (!video.empty ())
-      read.push_back (video);
-    for (const auto &out : {json_path, lines_path == "-" ? std::string () : lines_path, overlay_path})
-      if (!out.empty ())
-        agex::checkOutputIsNotInput (out, read);
-    const agex::ContourShapePredictor predictor = agex::apps::loadContourModel (model_path);
-    const agex::PeopleDetector detector = agex::apps::loadDetector (detector_choice);
+    const std::string lines_file = lines_path == "-" ? "" : lines_path;  // "-": standard output
+    agex::apps::checkLandmarkOutputs (json_path, lines_file, overlay_path, inputs, model_path, video);
+    const agex::ContourShapePredictor predictor = agex::loadContourModel (model_path);
+    const agex::PeopleDetector detector = agex::apps::loadPeopleDetector (detector_choice);
 
     agex::apps::LandmarkOutputs outputs (lines_path == "-");
     for (const std::string &input : inputs)
     {
-      const cv::Mat image = agex::apps::readImage (input, cv::IMREAD_COLOR);
-      LandmarkedFrame best = agex::apps::landmarkFrame (image, detector, predictor, threshold);
-      for (int r = 1; r < repeat; ++r)
-      {
-        const LandmarkedFrame again = agex::apps::landmarkFrame (image, detector, predictor, threshold);
-        best.detect_ms = std::min (best.detect_ms, again.detect_ms);
-        best.landmarks_ms = std::min (best.landmarks_ms, again.landmarks_ms);
-      }
-      outputs.add (input, image, std::move (best));
+      const cv::Mat image = agex::readImage (input, cv::IMREAD_COLOR);
+      outputs.add (input, image, agex::apps::landmarkPeopleFastest (image, detector, predictor, threshold, repeat));
     }
     if (!video.empty ())
       agex::apps::readVideo (video, max_frames, [&] (const std::string &source, const cv::Mat &frame) {
-        outputs.add (source, frame.clone (), agex::apps::landmarkFrame (frame, detector, predictor, threshold));
+        outputs.add (source, frame.clone (), agex::landmarkPeople (frame, detector, predictor, threshold));
       });
-    outputs.write ({{"model", model_path}, {"detector", detector.description ()}}, json_path,
-                   lines_path == "-" ? "" : lines_path, overlay_path);
+    outputs.write ({{"model", model_path}, {"detector", detector.description ()}}, json_path, lines_file, overlay_path);
     return 0;
   }
   catch (const std::exception &e)

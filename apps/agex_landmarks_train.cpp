@@ -3,7 +3,8 @@
 
 #include <agex/apps/command_line.h>
 #include <agex/apps/landmarks.h>
-#include <agex/io/atomic_file.h>
+#include <agex/landmarks/landmark_evaluation.h>
+#include <agex/landmarks/landmark_training.h>
 
 #include <boost/program_options.hpp>
 
@@ -20,7 +21,7 @@ main (int argc, char **argv)
   std::vector<std::string> dataset_paths;
   std::string model_path, detector_path;
   agex::ShapePredictorTrainingParams shape_params;
-  agex::apps::DetectorTraining detector_training;
+  agex::PeopleDetectorTraining detector_training;
   po::options_description general ("agex_landmarks_train --dataset XML --out MODEL [--detector-out FILE] [options]\n"
                                    "Trains the 180-landmark contour shape predictor (and the people detector)");
   general.add_options () ("help,h", "show this help")
@@ -33,21 +34,10 @@ main (int argc, char **argv)
   {
     if (!agex::apps::parseCommandLine (argc, argv, all, {}))
       return 0;
-    agex::InputFiles read (dataset_paths);
-    read.checkOutput (model_path);
-    if (!detector_path.empty ())
-    {
-      if (std::filesystem::weakly_canonical (detector_path) == std::filesystem::weakly_canonical (model_path))
-        throw std::runtime_error (detector_path + ": --detector-out and --out name the same file");
-      read.checkOutput (detector_path);
-    }
-    const auto images = agex::apps::loadLandmarkDatasets (dataset_paths);
-    // Nor on an image the datasets name.
-    for (const auto &image : images)
-      read.add (image.path);
-    for (const auto &out : {model_path, detector_path})
-      if (!out.empty ())
-        read.checkOutput (out);
+    if (!detector_path.empty () &&
+        std::filesystem::weakly_canonical (detector_path) == std::filesystem::weakly_canonical (model_path))
+      throw std::runtime_error (detector_path + ": --detector-out and --out name the same file");
+    const auto images = agex::apps::loadLandmarkInputs (dataset_paths, {}, {}, {model_path, detector_path}).images;
     std::vector<std::size_t> all_images (images.size ());
     std::iota (all_images.begin (), all_images.end (), 0);
     std::size_t people = 0;
@@ -57,10 +47,10 @@ main (int argc, char **argv)
 
     shape_params.verbose = true;  // dlib reports the cascade levels as it goes
     auto start = std::chrono::steady_clock::now ();
-    const agex::ContourShapePredictor predictor = agex::apps::trainShapePredictor (images, all_images, shape_params);
+    const agex::ContourShapePredictor predictor = agex::trainContourShapePredictor (images, all_images, shape_params);
     predictor.save (model_path);
     const double train_s = std::chrono::duration<double> (std::chrono::steady_clock::now () - start).count ();
-    agex::apps::LandmarkEvaluation training_fit;
+    agex::LandmarkEvaluation training_fit;
     for (const auto &image : images)
       training_fit.add (image, predictor, nullptr);
     const auto fit = training_fit.json ();
@@ -71,10 +61,9 @@ main (int argc, char **argv)
     {
       detector_training.params.verbose = true;
       std::size_t ignored = 0;
-      const agex::PeopleDetector detector =
-        agex::apps::trainPeopleDetector (images, all_images, detector_training, &ignored);
+      const agex::PeopleDetector detector = agex::trainPeopleDetector (images, all_images, detector_training, &ignored);
       detector.save (detector_path);
-      agex::apps::LandmarkEvaluation detection;
+      agex::LandmarkEvaluation detection;
       for (const auto &image : images)
         detection.add (image, predictor, &detector);
       std::cout << detector_path << ": " << ignored << " boxes the window cannot match were ignored; training recall "

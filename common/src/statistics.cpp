@@ -22,6 +22,31 @@ median (std::vector<double> values)
 }
 
 double
+averagePrecision (std::vector<std::pair<double, bool>> scored, std::size_t positives)
+{
+  if (positives == 0)
+    return 0.0;
+  std::stable_sort (scored.begin (), scored.end (), [] (const auto &a, const auto &b) { return a.first > b.first; });
+  std::vector<double> precision, recall;
+  std::size_t tp = 0;
+  for (std::size_t i = 0; i < scored.size (); ++i)
+  {
+    tp += scored[i].second;
+    precision.push_back (static_cast<double> (tp) / (i + 1));
+    recall.push_back (static_cast<double> (tp) / positives);
+  }
+  for (std::size_t i = precision.size (); i-- > 1;)
+    precision[i - 1] = std::max (precision[i - 1], precision[i]);
+  double ap = 0, previous_recall = 0;
+  for (std::size_t i = 0; i < recall.size (); ++i)
+  {
+    ap += (recall[i] - previous_recall) * precision[i];
+    previous_recall = recall[i];
+  }
+  return ap;
+}
+
+double
 angleBetweenDeg (const Eigen::Vector3f &a, const Eigen::Vector3f &b)
 {
   if (!a.allFinite () || !b.allFinite () || !(a.norm () > 0.f) || !(b.norm () > 0.f))

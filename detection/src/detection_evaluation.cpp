@@ -150,20 +150,13 @@ DetectionEvaluation::precisionRecall (BodyPart part) const
 double
 DetectionEvaluation::averagePrecision (BodyPart part) const
 {
-  const auto curve = precisionRecall (part);
-  if (positives_[static_cast<int> (part)] == 0)
+  const int positives = positives_[static_cast<int> (part)];
+  if (positives == 0)
     return std::nan ("");
-  // All-points interpolation (PASCAL VOC 2010+): precision made monotone from the right.
-  double ap = 0.0, previous_recall = 0.0;
-  for (std::size_t i = 0; i < curve.size (); ++i)
-  {
-    double best_precision = 0.0;
-    for (std::size_t j = i; j < curve.size (); ++j)
-      best_precision = std::max (best_precision, curve[j].second);
-    ap += (curve[i].first - previous_recall) * best_precision;
-    previous_recall = curve[i].first;
-  }
-  return ap;
+  std::vector<std::pair<double, bool>> scored;
+  for (const Scored &s : scored_[static_cast<int> (part)])
+    scored.emplace_back (s.confidence, s.correct);
+  return agex::averagePrecision (std::move (scored), static_cast<std::size_t> (positives));
 }
 
 std::array<std::array<int, 4>, 4>

@@ -1,11 +1,18 @@
 #include <agex/landmarks/rgbd_contour_annotator.h>
 
+#include <agex/io/pcd_reader.h>
+
+#include <pcl/PCLPointCloud2.h>
+#include <pcl/common/io.h>
 #include <pcl/console/print.h>
+#include <pcl/conversions.h>
 
 #include <Eigen/Core>
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
+#include <stdexcept>
 
 namespace agex
 {
@@ -119,5 +126,37 @@ RgbdContourAnnotator::compute (std::vector<RgbdPerson> &people)
     annotated += !person.too_small;
     people.push_back (std::move (person));
   }
+}
+
+cv::Mat
+readRgbdFrame (const std::string &path, pcl::PointCloud<pcl::PointXYZ>::Ptr &xyz)
+{
+  const pcl::PCLPointCloud2 blob = readPcd (path);  // FrameError names the file and the problem
+  bool has_colour = false;
+  for (const auto &field : blob.fields)
+    has_colour = has_colour || field.name == "rgb" || field.name == "rgba";
+  pcl::PointCloud<pcl::PointXYZRGBA> cloud;
+  pcl::fromPCLPointCloud2 (blob, cloud);
+  if (cloud.height < 2)
+    throw std::runtime_error (path + ": not an organized cloud (height " + std::to_string (cloud.height) + ")");
+  const int width = static_cast<int> (cloud.width), height = static_cast<int> (cloud.height);
+  cv::Mat colour (height, width, CV_8UC3);
+  xyz = std::make_shared<pcl::PointCloud<pcl::PointXYZ>> ();
+  pcl::copyPointCloud (cloud, *xyz);
+  for (int v = 0; v < height; ++v)
+    for (int u = 0; u < width; ++u)
+    {
+      const auto &p = cloud.at (u, v);
+      if (has_colour)
+        colour.at<cv::Vec3b> (v, u) = cv::Vec3b (p.b, p.g, p.r);
+      else
+      {
+        // Depth-only frames (agex_synth) get shaded depth: near bright, 1 m of depth per
+        // 50 grey levels, no measurement black.
+        const double grey = std::isfinite (p.z) ? std::clamp (255.0 - 50.0 * p.z, 30.0, 255.0) : 0.0;
+        colour.at<cv::Vec3b> (v, u) = cv::Vec3b::all (static_cast<unsigned char> (grey));
+      }
+    }
+  return colour;
 }
 }  // namespace agex

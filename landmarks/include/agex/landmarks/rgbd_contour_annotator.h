@@ -1,7 +1,8 @@
 #pragma once
 // Contour annotations of the people in an RGB-D frame: which surface meshes of the depth
 // stages are people (by metric size, silhouette fill and position), and their 180-landmark
-// outlines on the colour image, anchored by the AGEX extrema of each mesh.
+// outlines on the colour image, anchored by the AGEX extrema of each mesh; and such a frame
+// read from a PCD file.
 
 #include <agex/common/point_types.h>
 #include <agex/landmarks/contour_annotation.h>
@@ -10,10 +11,18 @@
 #include <pcl/point_cloud.h>
 #include <pcl/point_types.h>
 
+#include <string>
 #include <vector>
 
 namespace agex
 {
+/** \brief The colour image of an organized XYZRGBA PCD file (read with agex::readPcd) and its
+  * XYZ cloud, on the same pixel grid. Clouds without colour (agex_synth frames made without
+  * --colour) give shaded depth instead: near bright, no measurement black.
+  * \throws std::runtime_error (FrameError) naming the file when it cannot be read or is not
+  *         organized */
+cv::Mat readRgbdFrame (const std::string &path, pcl::PointCloud<pcl::PointXYZ>::Ptr &xyz);
+
 /** Which meshes are people. Lengths in metres (camera y is taken as roughly vertical). */
 struct RgbdPersonSelectionParams
 {

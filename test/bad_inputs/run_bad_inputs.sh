@@ -14,11 +14,12 @@ failures=0
 cp "$SRC"/test/bad_inputs/inputs/* in/
 cp "$SRC/data/frames/bonn_1_002.png" in/frame.png
 cp "$SRC/data/models/agex_bonn.yml" in/model.yml
+cp "$SRC/data/models/agex_bonn_forest.agexforest" in/  # the fused model's forest, named relative to it
 head -c 20000 in/frame.png > in/truncated.png
 : > in/empty.png
 head -c 1000 /dev/zero > in/wrong_size.u16
 head -c 100000 in/model.yml > in/truncated_model.yml
-sed 's/^format_version: 1$/format_version: 3/' in/model.yml > in/version3_model.yml
+sed 's/^format_version: [0-9]*$/format_version: 3/' in/model.yml > in/version3_model.yml
 head -c $((176 * 144 * 2)) /dev/zero | tr '\0' '\7' > in/wall_176x144.u16
 # A 176x144 .u16 camera: its size and intrinsics (depth images of 640x480 need none).
 SR="--width 176 --height 144 --fx 250 --fy 250 --cx 87.5 --cy 71.5"

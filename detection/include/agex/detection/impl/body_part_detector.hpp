@@ -91,19 +91,23 @@ template <typename PointT> void
 agex::BodyPartDetector<PointT>::assignPersons (std::vector<BodyPartDetection> &detections) const
 {
   const DepthPipelineResult &r = intermediate_;
-  if (r.persons.empty () || !r.filtered)
+  if (!r.filtered)
     return;
-  std::vector<int> person_of (r.filtered->size (), -1);
-  for (std::size_t m = 0; m < r.meshes.size () && m < r.mesh_person.size (); ++m)
+  // Each pixel's mesh, for the detections that are no AGEX point (a part mode's tip, a window).
+  std::vector<int> mesh_of (r.filtered->size (), -1);
+  for (std::size_t m = 0; m < r.meshes.size (); ++m)
     for (const auto i : r.meshes[m].indices)
-      person_of[static_cast<std::size_t> (i)] = r.mesh_person[m];
+      mesh_of[static_cast<std::size_t> (i)] = static_cast<int> (m);
   const int width = static_cast<int> (r.filtered->width);
   std::vector<BodyPartDetection> kept;
   for (auto &d : detections)
   {
     const int index = d.v * width + d.u;
-    if (index >= 0 && static_cast<std::size_t> (index) < person_of.size ())
-      d.person = person_of[static_cast<std::size_t> (index)];
+    const bool inside = d.u >= 0 && d.u < width && index >= 0 && static_cast<std::size_t> (index) < mesh_of.size ();
+    if (d.mesh < 0 && inside)
+      d.mesh = mesh_of[static_cast<std::size_t> (index)];
+    if (d.mesh >= 0 && static_cast<std::size_t> (d.mesh) < r.mesh_person.size ())
+      d.person = r.mesh_person[static_cast<std::size_t> (d.mesh)];
     // A person too far for its parts to have pixels enough gets no guesses (PersonInfo::too_far).
     if (d.person >= 0 && static_cast<std::size_t> (d.person) < r.person_info.size () &&
         r.person_info[static_cast<std::size_t> (d.person)].too_far)

@@ -117,6 +117,37 @@ DetectionEvaluation::addFrame (const std::vector<BodyPartDetection> &detections,
     const int tip = bestLabel (*d, labels);
     pairs_.push_back ({tip < 0 ? 3 : static_cast<int> (labels[tip].part), cls, d->confidence});
   }
+  // The top detections: per class, as many as the frame has visible tips of it, matched
+  // most confident first.
+  for (int cls = 0; cls < kBodyPartCount; ++cls)
+  {
+    std::vector<bool> used (labels.size (), false);
+    int wanted = 0;
+    for (const auto &l : labels)
+      wanted += l.visible && l.tip.allFinite () && static_cast<int> (l.part) == cls;
+    for (const BodyPartDetection *d : order)
+    {
+      if (wanted == 0)
+        break;
+      if (static_cast<int> (d->part) != cls)
+        continue;
+      --wanted;
+      int match = -1;
+      float best = -1.f;
+      for (std::size_t i = 0; i < labels.size (); ++i)
+        if (!used[i] && labels[i].part == d->part)
+        {
+          const float quality = matchQuality (*d, labels[i]);
+          if (quality >= 0.f && quality >= best)
+            best = quality, match = static_cast<int> (i);
+        }
+      if (match >= 0)
+      {
+        used[match] = true;
+        ++top_hits_[cls];
+      }
+    }
+  }
   // Tips no detection of any class reached, with the confidence it would have needed.
   for (std::size_t i = 0; i < labels.size (); ++i)
   {
@@ -179,6 +210,13 @@ DetectionEvaluation::orientationMedianDeg (BodyPart part) const
   return median (orientation_errors_[static_cast<int> (part)]);
 }
 
+double
+DetectionEvaluation::topRecall (BodyPart part) const
+{
+  const int c = static_cast<int> (part);
+  return positives_[c] > 0 ? static_cast<double> (top_hits_[c]) / positives_[c] : std::numeric_limits<double>::quiet_NaN ();
+}
+
 nlohmann::json
 DetectionEvaluation::report (float threshold) const
 {
@@ -196,6 +234,7 @@ DetectionEvaluation::report (float threshold) const
     doc["ap"][names[c]] = number (averagePrecision (part));
     doc["orientation_median_deg"][names[c]] = number (orientationMedianDeg (part));
     doc["labels"][names[c]] = positives_[c];
+    doc["top_recall"][names[c]] = number (topRecall (part));
   }
   const auto m = confusion (threshold);
   nlohmann::json cm;
@@ -320,6 +359,7 @@ DetectionEvaluation::state () const
   nlohmann::json doc = {{"format", kEvaluationFormat}, {"version", 1}, {"radius", radius_}, {"min_iou", min_iou_},
                         {"focal", focal_}, {"frames", frames_}};
   doc["positives"] = positives_;
+  doc["top_hits"] = top_hits_;
   for (int c = 0; c < kBodyPartCount; ++c)
   {
     nlohmann::json scored = nlohmann::json::array ();
@@ -345,9 +385,11 @@ DetectionEvaluation::fromState (const nlohmann::json &doc, const std::string &so
   const auto &positives = r.array (r.at ("positives"), "positives", kBodyPartCount);
   const auto &scored = r.array (r.at ("scored"), "scored", kBodyPartCount);
   const auto &errors = r.array (r.at ("orientation_errors"), "orientation_errors", kBodyPartCount);
+  const auto &top_hits = r.array (r.at ("top_hits"), "top_hits", kBodyPartCount);
   for (int c = 0; c < kBodyPartCount; ++c)
   {
     e.positives_[c] = static_cast<int> (r.integer (positives[c], "positives", 0, std::numeric_limits<int>::max ()));
+    e.top_hits_[c] = static_cast<int> (r.integer (top_hits[c], "top_hits", 0, e.positives_[c]));
     for (const auto &s : r.array (scored[c], "scored"))
     {
       r.array (s, "scored entry", 2);
@@ -377,6 +419,7 @@ DetectionEvaluation::merge (const DetectionEvaluation &other)
   for (int c = 0; c < kBodyPartCount; ++c)
   {
     positives_[c] += other.positives_[c];
+    top_hits_[c] += other.top_hits_[c];
     scored_[c].insert (scored_[c].end (), other.scored_[c].begin (), other.scored_[c].end ());
     orientation_errors_[c].insert (orientation_errors_[c].end (), other.orientation_errors_[c].begin (),
                                    other.orientation_errors_[c].end ());

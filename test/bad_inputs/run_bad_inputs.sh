@@ -261,10 +261,15 @@ check "agex_eval coverage under --shard" 1 "only agex_eval detect shares its fra
 
 # Parsers that would recurse without bound, and inputs that would block.
 cp "$SRC/test/fuzz/regressions/model/nested_100000_deep_overflows_opencv_stack.yml" in/nested_model.yml
+cp "$SRC/test/fuzz/regressions/imglab_xml/nested_50000_deep_overflowed_the_stack.xml" in/nested_imglab.xml
 mkdir -p fifo && mkfifo fifo/frame.u16
 (cd in && find . -type f -print0 | sort -z | xargs -0 sha256sum) > inputs.sha256
 check "model nested 100,000 deep ([[[...)" 1 "nested_model.yml:3: nested more than 1000 levels deep" $D in/frame.png --model in/nested_model.yml --json out/a.json
 check "the same model for agex_eval" 1 "nested_model.yml:3: nested more than 1000 levels deep" $E compare --dataset in/dataset --model-agex in/nested_model.yml
+if [ -x "$BIN/agex_landmarks_train" ]; then
+  check "imglab XML nested 50,000 deep, agex_landmarks_train" 1 "nested_imglab.xml:.*nested more than 64" $BIN/agex_landmarks_train --dataset in/nested_imglab.xml --out out/shape.dat
+  check "the same XML for agex_landmarks_eval" 1 "nested_imglab.xml:.*nested more than 64" $BIN/agex_landmarks_eval --dataset in/nested_imglab.xml --model out/shape.dat
+fi
 check "a .u16 frame that is a FIFO" 1 "frame.u16: is a FIFO \\(named pipe\\), not a regular file" timeout 20 $D fifo/frame.u16 --json out/a.json
 
 # Model settings are checked like the flags they mirror (file and key named).

@@ -202,3 +202,55 @@ TEST (PersonEvaluation, PeopleFoundByDistanceBandAndFiringOnNobody)
   EXPECT_DOUBLE_EQ (a.report ()["non_person_detections_per_frame"].get<double> (), 1.0);
 }
 }  // namespace
+
+namespace
+{
+agex::PartLabel
+tipAt (agex::BodyPart part, const Eigen::Vector3f &tip)
+{
+  agex::PartLabel l;
+  l.part = part;
+  l.tip = tip;
+  l.base = tip + Eigen::Vector3f (0.f, 0.2f, 0.f);
+  return l;
+}
+
+agex::BodyPartDetection
+foundAt (agex::BodyPart part, const Eigen::Vector3f &p, float confidence)
+{
+  agex::BodyPartDetection d;
+  d.part = part;
+  d.position = p;
+  d.confidence = confidence;
+  return d;
+}
+
+TEST (DetectionEvaluation, TopRecallTakesAsManyDetectionsAsTheFrameHasTips)
+{
+  using agex::BodyPart;
+  const Eigen::Vector3f left (-0.3f, 0.f, 2.f), right (0.3f, 0.f, 2.f), head (0.f, -0.8f, 2.f);
+  agex::DetectionEvaluation evaluation (0.1f);
+  // Frame 1: two hands; the two most confident hand detections are one right, one on the
+  // belly; the third (right, on the other hand) comes too late. The head is found.
+  evaluation.addFrame ({foundAt (BodyPart::Hand, left + Eigen::Vector3f (0.05f, 0.f, 0.f), 0.9f),
+                        foundAt (BodyPart::Hand, Eigen::Vector3f (0.f, 0.2f, 2.f), 0.8f),
+                        foundAt (BodyPart::Hand, right, 0.7f), foundAt (BodyPart::Head, head, 0.4f)},
+                       {tipAt (BodyPart::Hand, left), tipAt (BodyPart::Hand, right), tipAt (BodyPart::Head, head)});
+  // Frame 2: one hand labelled (the other invisible), found by the best detection; no head
+  // detection for the head.
+  agex::PartLabel hidden = tipAt (BodyPart::Hand, right);
+  hidden.visible = false;
+  evaluation.addFrame ({foundAt (BodyPart::Hand, right, 0.6f), foundAt (BodyPart::Hand, left, 0.5f)},
+                       {tipAt (BodyPart::Hand, right), hidden, tipAt (BodyPart::Head, head)});
+  EXPECT_DOUBLE_EQ (evaluation.topRecall (BodyPart::Hand), 2.0 / 3.0);
+  EXPECT_DOUBLE_EQ (evaluation.topRecall (BodyPart::Head), 1.0 / 2.0);
+  EXPECT_TRUE (std::isnan (evaluation.topRecall (BodyPart::Foot)));  // no foot labelled
+  const auto report = evaluation.report (0.5f);
+  EXPECT_DOUBLE_EQ (report["top_recall"]["hand"].get<double> (), 2.0 / 3.0);
+  EXPECT_TRUE (report["top_recall"]["foot"].is_null ());
+  // Kept through a state and a merge.
+  auto merged = agex::DetectionEvaluation::fromState (evaluation.state (), "state");
+  merged.merge (evaluation);
+  EXPECT_DOUBLE_EQ (merged.topRecall (BodyPart::Hand), 2.0 / 3.0);
+}
+}  // namespace

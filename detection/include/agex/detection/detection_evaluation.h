@@ -45,6 +45,11 @@ public:
     * none), counting detections at or above the threshold and tips nothing found. */
   std::array<std::array<int, 4>, 4> confusion (float threshold) const;
   double orientationMedianDeg (BodyPart part) const;
+  /** \brief Recall of the top detections: per frame, as many of a class's most confident
+    * detections as the frame has visible tips of that class (one head, two hands, ...), the
+    * share of those tips they match. What a user who takes "the best head and the two best
+    * hands" of every frame gets, without choosing a threshold. */
+  double topRecall (BodyPart part) const;
   int frames () const { return frames_; }
   nlohmann::json report (float confusion_threshold) const;
 
@@ -77,6 +82,7 @@ private:
   int frames_ = 0;
   std::array<std::vector<Scored>, kBodyPartCount> scored_;
   std::array<int, kBodyPartCount> positives_{};
+  std::array<int, kBodyPartCount> top_hits_{};  ///< tips matched by the frame's top detections
   // For the confusion matrix: every detection's (truth, predicted, confidence) and
   // every tip's best detection confidence of its own class.
   struct Pair

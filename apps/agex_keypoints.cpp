@@ -6,8 +6,8 @@
 #include <agex/apps/frame_jobs.h>
 #include <agex/apps/output_guard.h>
 #include <agex/apps/pipeline_flags.h>
-#include <agex/detection/depth_pipeline.h>
 #include <agex/apps/output.h>
+#include <agex/detection/depth_pipeline.h>
 #include <agex/io/atomic_file.h>
 #include <agex/io/frame_io.h>
 
@@ -53,20 +53,7 @@ main (int argc, char **argv)
     const agex::Frame frame = agex::loadFrame (input, frame_options);
     const agex::DepthPipelineResult result = agex::runDepthPipeline (frame.cloud, params);
 
-    nlohmann::json doc;
-    doc["frame"] = input;
-    doc["width"] = frame.cloud->width;
-    doc["height"] = frame.cloud->height;
-    doc["meshes"] = result.meshes.size ();
-    doc["mesh_points"] = nlohmann::json::array ();
-    for (const auto &mesh : result.meshes)
-      doc["mesh_points"].push_back (mesh.indices.size ());
-    doc["interest_points"] = nlohmann::json::array ();
-    for (const auto &p : result.interest_points)
-      doc["interest_points"].push_back (agex::apps::interestPointJson (p));
-    doc["ms"] = nlohmann::json::object ();
-    for (const auto &[stage, ms] : result.ms)
-      doc["ms"][stage] = ms;
+    const nlohmann::json doc = agex::apps::keypointsJson (input, *frame.cloud, result);
     if (!json_path.empty ())
       agex::apps::writeJson (json_path, doc);
     if (!overlay_path.empty ())

@@ -4,107 +4,40 @@
 
 #include <agex/apps/command_line.h>
 #include <agex/apps/output_guard.h>
+#include <agex/apps/synth_flags.h>
 #include <agex/io/atomic_file.h>
 #include <agex/simulation/synthetic_scene.h>
 
-#include <boost/program_options.hpp>
-
-#include <charconv>
-#include <filesystem>
-#include <cmath>
 #include <iostream>
-
-namespace po = boost::program_options;
-
-namespace
-{
-double
-parseBvhScale (const std::string &text)
-{
-  if (text == "auto")
-    return 0.0;
-  double value = 0.0;
-  const auto result = std::from_chars (text.data (), text.data () + text.size (), value);
-  if (result.ec != std::errc () || result.ptr != text.data () + text.size () || !std::isfinite (value) || value <= 0)
-    throw std::runtime_error ("--bvh-scale must be 'auto' or a positive number of metres per BVH unit, got '" + text +
-                              "'");
-  return value;
-}
-}  // namespace
 
 int
 main (int argc, char **argv)
 {
-  agex::SynthOptions options;
-  std::string sensor = "sr4000", scale = "auto", output;
-  int frames = 0;
-  bool force = false;
-
-  po::options_description general (
-      "agex_synth --motion FILE... --frames N --sensor sr4000|kinect|bonn --seed S --output DIR [options]\n"
-      "Renders labelled depth frames of people posed by BVH motion capture and writes an agex dataset");
-  general.add_options () ("help,h", "show this help")
-    ("motion", po::value (&options.motion_files)->multitoken (), "BVH motion files (CMU skeletons)")
-    ("frames", po::value (&frames), "number of frames to render")
-    ("sensor", po::value (&sensor)->default_value (sensor), "sensor model: sr4000 (144x176 time of flight), kinect (640x480) or bonn (kinect in the Bonn frames' 8-bit "
-     "depth steps and 144x176 portrait view)")
-    ("seed", po::value (&options.seed)->default_value (options.seed), "random seed; the same seed gives the same bytes")
-    ("output", po::value (&output), "dataset directory to write")
-    ("force", po::bool_switch (&force), "replace an existing output directory")
-    ("bvh-scale", po::value (&scale)->default_value (scale),
-     "metres per BVH unit, or auto (by rest-pose height: metres, CMU units x0.056444, cm, mm)")
-    ("subjects", po::value (&options.subjects)->default_value (options.subjects), "body shapes drawn from the seed")
-    ("people", po::value (&options.people)->default_value (options.people),
-     "people per frame, 1-4; several stand at random distances and bearings in front of the camera, partly hiding "
-     "each other")
-    ("min-distance", po::value (&options.min_distance)->default_value (options.min_distance, "1.5; 0.8 with --people 2-4"),
-     "camera to body (each person's), metres")
-    ("max-distance", po::value (&options.max_distance)->default_value (options.max_distance, "3.5; 6 with --people 2-4"),
-     "camera to body (each person's), metres")
-    ("min-height", po::value (&options.min_height)->default_value (options.min_height, "0.8"), "camera above the floor, metres")
-    ("max-height", po::value (&options.max_height)->default_value (options.max_height, "1.6"), "camera above the floor, metres")
-    ("body-mesh", po::value (&options.body_mesh),
-     "MakeHuman directory (base.obj, default.mhskel, default_weights.mhw, e.g. ../shared/data/makehuman): skinned mesh "
-     "bodies instead of capsules")
-    ("colour", po::bool_switch (&options.colour),
-     "also paint each frame in colour (random clothes, room and light; sr4000 and kinect): XYZRGBA frames for "
-     "agex_annotate rgbd; the depth stays the same");
-  po::positional_options_description positional;
-
+  agex::apps::SynthFlags flags;
   try
   {
-    if (!agex::apps::parseCommandLine (argc, argv, general, positional))
+    if (!agex::apps::parseSynthFlags (argc, argv, flags))
       return 0;
-    if (options.motion_files.empty ())
-      throw std::runtime_error ("no --motion BVH files given (see --help)");
-    if (frames < 1)
-      throw std::runtime_error ("--frames must be at least 1");
-    if (output.empty ())
-      throw std::runtime_error ("no --output directory given");
-    if (options.people < 1 || options.people > 4)
-      throw std::runtime_error ("--people must be 1-4, got " + std::to_string (options.people));
-    if (!agex::parseSynthSensor (sensor, options.sensor))
-      throw std::runtime_error ("unknown --sensor '" + sensor + "' (expected sr4000, kinect or bonn)");
-    options.bvh_scale = parseBvhScale (scale);
-    std::vector<std::string> inputs = options.motion_files;
-    if (!options.body_mesh.empty ())
-      inputs.push_back (options.body_mesh);
-    agex::apps::checkOutputPath (output, agex::apps::OutputKind::Dataset, agex::InputFiles (inputs), force);
+    std::vector<std::string> inputs = flags.options.motion_files;
+    if (!flags.options.body_mesh.empty ())
+      inputs.push_back (flags.options.body_mesh);
+    agex::apps::checkOutputPath (flags.output, agex::apps::OutputKind::Dataset, agex::InputFiles (inputs), flags.force);
 
-    const agex::SynthGenerator generator (options);
+    const agex::SynthGenerator generator (flags.options);
     for (const auto &clip : generator.clips ())
       std::cout << clip.motion.path () << ": " << clip.motion.frameCount () << " frames, " << clip.scale
                 << " m/unit" << (clip.scale_auto ? " (auto)" : "") << ", rest height "
                 << agex::restStandingHeight (clip) << " m\n";
-    agex::apps::Progress progress ("rendered", static_cast<std::size_t> (frames));
-    const agex::SynthRunStats stats = agex::writeSyntheticDataset (
-        generator, frames, output, force, [&] (int done, int) { progress.step (static_cast<std::size_t> (done)); });
+    agex::apps::Progress progress ("rendered", static_cast<std::size_t> (flags.frames));
+    const agex::SynthRunStats stats =
+        agex::writeSyntheticDataset (generator, flags.frames, flags.output, flags.force,
+                                     [&] (int done, int) { progress.step (static_cast<std::size_t> (done)); });
 
-    std::cout << output << ": " << stats.frames << " " << sensor << " frames (" << generator.sensor ().width << "x"
-              << generator.sensor ().height << "), " << stats.visible_labels << " of " << stats.labels
-              << " labels visible\n"
-              << "  render " << stats.render_ms / stats.frames << " ms/frame, write " << stats.write_ms / stats.frames
-              << " ms/frame\n";
+    std::cout << flags.output << ": " << stats.frames << " " << flags.sensor << " frames ("
+              << generator.sensor ().width << "x" << generator.sensor ().height << "), " << stats.visible_labels
+              << " of " << stats.labels << " labels visible\n"
+              << "  render " << stats.render_ms / stats.frames << " ms/frame, write "
+              << stats.write_ms / stats.frames << " ms/frame\n";
     return 0;
   }
   catch (const std::exception &e)

@@ -46,6 +46,26 @@ interestPointJson (const agex::InterestPoint &p)
           {"geodesic_distance", p.geodesic_distance}};
 }
 
+nlohmann::json
+keypointsJson (const std::string &frame, const pcl::PointCloud<pcl::PointXYZ> &cloud, const DepthPipelineResult &result)
+{
+  nlohmann::json doc;
+  doc["frame"] = frame;
+  doc["width"] = cloud.width;
+  doc["height"] = cloud.height;
+  doc["meshes"] = result.meshes.size ();
+  doc["mesh_points"] = nlohmann::json::array ();
+  for (const auto &mesh : result.meshes)
+    doc["mesh_points"].push_back (mesh.indices.size ());
+  doc["interest_points"] = nlohmann::json::array ();
+  for (const auto &p : result.interest_points)
+    doc["interest_points"].push_back (interestPointJson (p));
+  doc["ms"] = nlohmann::json::object ();
+  for (const auto &[stage, ms] : result.ms)
+    doc["ms"][stage] = ms;
+  return doc;
+}
+
 cv::Scalar
 rankColour (int rank)
 {

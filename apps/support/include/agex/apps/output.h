@@ -6,6 +6,7 @@
 #include <agex/classification/part_modes.h>
 #include <agex/common/point_types.h>
 #include <agex/detection/body_part_detection.h>
+#include <agex/detection/depth_pipeline.h>
 #include <agex/filters/person_segmentation.h>
 #include <agex/io/dataset.h>
 
@@ -31,6 +32,11 @@ void writePng (const std::string &path, const cv::Mat &image);
 
 /** An interest point as the apps' JSON shows it. */
 nlohmann::json interestPointJson (const agex::InterestPoint &p);
+
+/** agex_keypoints' document of a frame (named frame): its size, the points of each mesh, the
+  * interest points and each stage's milliseconds. */
+nlohmann::json keypointsJson (const std::string &frame, const pcl::PointCloud<pcl::PointXYZ> &cloud,
+                              const DepthPipelineResult &result);
 
 /** \brief Draws the depth frame (grey, near = bright), the kept meshes tinted,
   * and each interest point as a disc coloured by rank with an orientation arrow. */

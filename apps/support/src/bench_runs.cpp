@@ -1,0 +1,139 @@
+#include <agex/apps/bench_runs.h>
+
+#include <agex/apps/command_line.h>
+#include <agex/apps/dataset_selection.h>
+#include <agex/detection/benchmark.h>
+
+#include <atomic>
+#include <chrono>
+#include <cstdio>
+#include <thread>
+
+namespace agex
+{
+namespace apps
+{
+namespace
+{
+using Cloud = pcl::PointCloud<pcl::PointXYZ>;
+
+nlohmann::json
+statsJson (const TimingStats &s)
+{
+  return {{"median", s.median}, {"p95", s.p95}};
+}
+
+nlohmann::json
+benchView (const std::string &label, const Cloud::Ptr &cloud, const DepthPipelineParams &params, int k, int repeat)
+{
+  const DepthPipelineBenchmark bench = benchmarkDepthPipeline (cloud, params, k, repeat);
+  std::printf ("  %-9s %4ux%-4u %zu meshes, %zu mesh points, %zu points\n", label.c_str (), cloud->width,
+               cloud->height, bench.meshes, bench.mesh_points, bench.points);
+  std::printf ("    AGEX_%d incremental  %8.3f ms median  %8.3f ms p95\n", k, bench.agex_incremental.median,
+               bench.agex_incremental.p95);
+  std::printf ("    AGEX_%d naive        %8.3f ms median  %8.3f ms p95\n", k, bench.agex_naive.median,
+               bench.agex_naive.p95);
+  std::printf ("    speed-up %.1fx, results %s\n", bench.speedup (), bench.identical ? "identical" : "DIFFERENT");
+  nlohmann::json stages = nlohmann::json::object ();
+  std::printf ("    pipeline (k=%d):", params.k);
+  for (const auto &[stage, s] : bench.pipeline)
+  {
+    stages[stage] = statsJson (s);
+    std::printf (" %s %.2f", stage.c_str (), s.median);
+  }
+  std::printf (" ms (medians)\n");
+
+  return {{"width", cloud->width},
+          {"height", cloud->height},
+          {"meshes", bench.meshes},
+          {"mesh_points", bench.mesh_points},
+          {"k", k},
+          {"agex_incremental_ms", statsJson (bench.agex_incremental)},
+          {"agex_naive_ms", statsJson (bench.agex_naive)},
+          {"speedup", bench.speedup ()},
+          {"identical", bench.identical},
+          {"pipeline_ms", stages}};
+}
+}  // namespace
+
+nlohmann::json
+benchFrames (const std::vector<std::string> &inputs, const FrameOptions &frame_options, const DepthPipelineParams &params,
+             int k, int repeat, bool portrait)
+{
+  nlohmann::json doc;
+  doc["k"] = k;
+  doc["repeat"] = repeat;
+  doc["frames"] = nlohmann::json::array ();
+  for (const auto &input : inputs)
+  {
+    const Frame frame = loadFrame (input, frame_options);
+    std::printf ("%s\n", input.c_str ());
+    nlohmann::json entry;
+    entry["frame"] = input;
+    entry["full"] = benchView ("full", frame.cloud, params, k, repeat);
+    if (portrait && frame.cloud->width == 640 && frame.cloud->height == 480)
+    {
+      Cloud::Ptr view (new Cloud);
+      applyView (*frame.cloud, bonnPortraitView (), *view);
+      entry["portrait"] = benchView ("portrait", view, params, k, repeat);
+    }
+    doc["frames"].push_back (entry);
+  }
+  return doc;
+}
+
+nlohmann::json
+benchDataset (const std::string &spec, bool keyframes_only, const LoadedDetector &loaded, int passes, int jobs)
+{
+  const DatasetSelection selection = selectDataset (spec, keyframes_only);
+  if (selection.frame_ids.empty ())
+    throw std::runtime_error (spec + ": no frames selected");
+  const auto &intr = selection.dataset.info ().intrinsics;
+  const float fx = static_cast<float> (intr.fx), fy = static_cast<float> (intr.fy);
+
+  // Frames are loaded first: file I/O is not part of the detector.
+  std::vector<Cloud::ConstPtr> clouds;
+  for (const auto &id : selection.frame_ids)
+    clouds.push_back (selection.dataset.loadFrame (id));
+
+  const DetectorSetup setup = [&loaded] (BodyPartDetector<pcl::PointXYZ> &detector) { loaded.configure (detector); };
+  Progress progress ("frames", clouds.size ());
+  const DetectorBenchmark bench = benchmarkDetector (clouds, setup, fx, fy, passes,
+                                                     [&] (std::size_t done, std::size_t) { progress.step (done); });
+  nlohmann::json stages = nlohmann::json::object ();
+  std::printf ("%s: %zu frames %ux%u, %d pass%s each, one thread\n", spec.c_str (), clouds.size (),
+               clouds.front ()->width, clouds.front ()->height, passes, passes == 1 ? "" : "es");
+  for (const auto &[stage, s] : bench.stages)
+  {
+    std::printf ("  %-14s %8.3f ms median  %8.3f ms p95\n", stage.c_str (), s.median, s.p95);
+    if (stage != "total")
+      stages[stage] = statsJson (s);
+  }
+
+  // Throughput: every frame once, spread over the threads.
+  std::atomic<std::size_t> next{0};
+  const auto start = std::chrono::steady_clock::now ();
+  jobs = runWorkers (jobs, clouds.size (), [&] () {
+    for (std::size_t i = next++; i < clouds.size (); i = next++)
+      timeDetection (clouds[i], setup, fx, fy);
+  });
+  const double seconds = std::chrono::duration<double> (std::chrono::steady_clock::now () - start).count ();
+  const double fps = seconds > 0 ? clouds.size () / seconds : 0.0;
+  std::printf ("  throughput     %8.1f frames/s with %d job%s (%u hardware threads)\n", fps, jobs,
+               jobs == 1 ? "" : "s", std::thread::hardware_concurrency ());
+
+  return {{"dataset", spec},
+          {"model", loaded.files.front ()},
+          {"detector_mode", loaded.mode_name},
+          {"forest", loaded.forest ? loaded.files.back () : std::string ()},
+          {"forest_stride", loaded.forest_stride},
+          {"frames", clouds.size ()},
+          {"width", clouds.front ()->width},
+          {"height", clouds.front ()->height},
+          {"passes", passes},
+          {"ms_per_frame", statsJson (bench.total)},
+          {"stages", stages},
+          {"throughput", {{"jobs", jobs}, {"frames_per_second", fps}}}};
+}
+}  // namespace apps
+}  // namespace agex

@@ -1,0 +1,81 @@
+#include <agex/apps/detect_runs.h>
+
+#include <agex/apps/live_runs.h>
+#include <agex/apps/output.h>
+#include <agex/apps/output_guard.h>
+#include <agex/detection/body_part_detector.h>
+
+#include <chrono>
+#include <iostream>
+
+namespace agex
+{
+namespace apps
+{
+nlohmann::json
+detectFrame (const FrameJob &job, const LoadedDetector &loaded, const DetectFlags &flags, cv::Mat *overlay,
+             cv::Mat *parts_overlay, const SourceFrame *live)
+{
+  const auto start = std::chrono::steady_clock::now ();
+  const Frame frame = live ? liveFrame (*live) : loadFrame (job.path, flags.frame_options);
+  BodyPartDetector<pcl::PointXYZ> detector;
+  loaded.configure (detector);
+  if (frame.from_depth_image)  // a PCD carries no intrinsics: the detector estimates them
+    detector.setFocalLength (static_cast<float> (frame.intrinsics.fx), static_cast<float> (frame.intrinsics.fy));
+  detector.setInputCloud (frame.cloud);
+  std::vector<BodyPartDetection> detections;
+  detector.compute (detections);
+  const DepthPipelineResult &prepared = detector.getIntermediate ();
+  nlohmann::json doc = {{"frame", job.name}, {"path", job.path}, {"width", frame.cloud->width},
+                        {"height", frame.cloud->height}, {"detector_mode", loaded.mode_name},
+                        {"detections", nlohmann::json::array ()}};
+  for (const auto &d : detections)
+    doc["detections"].push_back (toJson (d));
+  doc["persons"] = personsJson (prepared.person_info);
+  doc["ms"] = nlohmann::json::object ();
+  for (const auto &[stage, ms] : prepared.ms)
+    if (stage != "total")
+      doc["ms"][stage] = ms;
+  doc["ms"]["total"] = std::chrono::duration<double, std::milli> (std::chrono::steady_clock::now () - start).count ();
+  if (overlay)
+    *overlay = renderDetections (*frame.cloud, prepared.meshes, detections, flags.min_confidence);
+  if (parts_overlay)
+    *parts_overlay = renderPartLabels (*frame.cloud, detector.getPartLabels (), detector.getPartModes (), {});
+  return doc;
+}
+
+void
+checkDetectOutputs (const DetectFlags &flags, bool single, const InputFiles &read)
+{
+  if (!flags.json_path.empty ())
+    checkOutputPath (flags.json_path, single ? OutputKind::JsonDocument : OutputKind::JsonLines, read);
+  for (const auto &png : {flags.overlay_path, flags.parts_overlay_path})
+  {
+    if (!png.empty () && !single)
+      throw std::runtime_error ("--overlay and --parts-overlay take a single frame");
+    if (!png.empty ())
+      checkOutputPath (png, OutputKind::Png, read);
+  }
+}
+
+void
+detectSingleFrame (const FrameJob &job, const LoadedDetector &loaded, const DetectFlags &flags)
+{
+  cv::Mat overlay, parts_overlay;
+  const nlohmann::json doc = detectFrame (job, loaded, flags, flags.overlay_path.empty () ? nullptr : &overlay,
+                                          flags.parts_overlay_path.empty () ? nullptr : &parts_overlay);
+  if (!flags.json_path.empty ())
+    writeJson (flags.json_path, doc);
+  else
+    std::cout << doc.dump (2) << "\n";
+  if (!flags.overlay_path.empty ())
+    writePng (flags.overlay_path, overlay);
+  if (!flags.parts_overlay_path.empty ())
+    writePng (flags.parts_overlay_path, parts_overlay);
+  for (const auto &d : doc["detections"])
+    if (d["confidence"].get<float> () >= flags.min_confidence)
+      std::cerr << "  " << d["class"].get<std::string> () << " " << d["confidence"].get<float> () << " at pixel ("
+                << d["pixel"][0] << ", " << d["pixel"][1] << ")\n";
+}
+}  // namespace apps
+}  // namespace agex

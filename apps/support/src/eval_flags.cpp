@@ -1,0 +1,106 @@
+#include <agex/apps/eval_flags.h>
+
+#include <agex/apps/command_line.h>
+#include <agex/apps/forest_flags.h>
+#include <agex/apps/output_guard.h>
+#include <agex/apps/pipeline_flags.h>
+
+#include <boost/program_options.hpp>
+
+#include <filesystem>
+#include <stdexcept>
+
+namespace po = boost::program_options;
+
+namespace agex
+{
+namespace apps
+{
+EvalFlags::EvalFlags ()
+  : agex_model_path (kBundledAgexModelFile), sw_model_path (kBundledSlidingWindowModelFile),
+    fused_model_path (kBundledModelFile)
+{
+}
+
+bool
+parseEvalFlags (int argc, char **argv, bool distributed, EvalFlags &flags)
+{
+  std::vector<std::string> vector_flags;
+  po::options_description general ("agex_eval coverage|detect|compare|parts --dataset DIR[@SEQ,...] [options]\n"
+                                    "Evaluates AGEX coverage, body-part detection or a forest's part labels on a\n"
+                                    "labelled agex dataset, or compares the AGEX detector with the sliding-window baseline");
+  general.add_options () ("help,h", "show this help") ("mode", po::value (&flags.mode), "coverage, detect, compare or parts")
+    ("dataset", po::value (&flags.dataset_dir), "dataset directory")
+    ("k", po::value (&flags.k)->default_value (flags.k), "number of extrema per mesh scored")
+    ("radius", po::value (&flags.radius)->default_value (flags.radius, "0.1"), "metres between a tip and a point that covers it")
+    ("keyframes", po::bool_switch (&flags.keyframes), "score keyframes only")
+    ("details", po::bool_switch (&flags.details), "list every scored label in the JSON (first rank, nearest point)")
+    ("json", po::value (&flags.json_path), "write the report as JSON here")
+    ("plot", po::value (&flags.plot_path), "coverage: write the coverage-vs-k curve (k up to 20) as PNG here")
+    ("plots", po::value (&flags.plots_dir),
+     "detect: write precision_recall.png into this directory; compare: compare_{head,hand,foot}.png")
+    ("overlay-dir", po::value (&flags.overlay_dir), "parts: write each frame's part map into this directory")
+    ("model-agex", po::value (&flags.agex_model_path)->default_value (flags.agex_model_path), "compare: the AGEX model (default: the bundled model)")
+    ("model-sw", po::value (&flags.sw_model_path)->default_value (flags.sw_model_path),
+     "compare: the sliding-window model (default: the bundled one)")
+    ("model-fused", po::value (&flags.fused_model_path)->default_value (flags.fused_model_path),
+     "compare: the fused model beside them (default: the bundled detector; empty: none)")
+    ("min-iou", po::value (&flags.min_iou)->default_value (flags.min_iou, "0.5"),
+     "compare: box overlap (intersection over union) above which a detection matches a part")
+    ("window-stride", po::value (&flags.window_override.stride),
+     "compare: pixels between window centres (default: the sliding-window model's)")
+    ("window-scales", po::value (&flags.window_override.scales)->multitoken (),
+     "compare: window extents over the trained extent (default: the sliding-window model's)")
+    ("shard", po::value (&flags.shard), "detect: only the K-th (0-based) of N equal parts of the frames (K/N), for job arrays")
+    ("merge", po::value (&flags.merge_parts)->multitoken (), "detect: reduce the --json reports of every --shard run into --json");
+  // The pipeline's own --k (points per mesh) would make --k ambiguous: coverage sets it.
+  po::options_description pipeline ("Pipeline (coverage)");
+  const po::options_description pipeline_all = pipelineOptionsDescription (flags.params, vector_flags);
+  for (const auto &option : pipeline_all.options ())
+    if (option->long_name () != "k")
+      pipeline.add (option);
+  po::options_description all;
+  all.add (general).add (detectorOptionsDescription (flags.detector, kBundledModelFile))
+     .add (weakLabelOptions (flags.weak)).add (pipeline);
+  po::positional_options_description positional;
+  positional.add ("mode", 1);
+
+  if (!parseCommandLine (argc, argv, all, positional))
+    return false;
+  if ((distributed || !flags.shard.empty () || !flags.merge_parts.empty ()) && flags.mode != "detect")
+    throw std::runtime_error ("only agex_eval detect shares its frames (mpirun, --shard, --merge)");
+  if (!flags.merge_parts.empty ())
+    return true;
+  finishPipelineOptions (vector_flags, flags.params);
+  flags.weak.validate ();
+  if (flags.dataset_dir.empty ())
+    throw std::runtime_error ("--dataset is required (see --help)");
+  if (flags.k < 1 || flags.k > 200 || !(flags.radius > 0.f && flags.radius <= 1.f) ||
+      !(flags.min_iou > 0.f && flags.min_iou < 1.f))
+    throw std::runtime_error ("--k must lie in [1, 200], --radius in (0, 1] m and --min-iou in (0, 1)");
+  if (flags.mode != "coverage" && flags.mode != "detect" && flags.mode != "compare" && flags.mode != "parts")
+    throw std::runtime_error ("unknown mode '" + flags.mode + "' (expected coverage, detect, compare or parts)");
+  return true;
+}
+
+void
+checkEvalOutputs (const EvalFlags &flags, const DatasetSelection &selection)
+{
+  InputFiles read;
+  read.addTree (selection.dataset.directory ());
+  for (const auto &model :
+       {flags.detector.model, flags.agex_model_path, flags.sw_model_path, flags.fused_model_path, flags.detector.forest})
+    if (!model.empty ())
+      std::filesystem::is_directory (model) ? read.addTree (model) : read.add (model);
+  if (!flags.json_path.empty ())
+    checkOutputPath (flags.json_path, OutputKind::Json, read);
+  if (!flags.plot_path.empty ())
+    checkOutputPath (flags.plot_path, OutputKind::Png, read);
+  for (const auto &dir : {flags.plots_dir, flags.overlay_dir})
+    if (!dir.empty () && std::filesystem::exists (dir) && !std::filesystem::is_directory (dir))
+      throw std::runtime_error (dir + ": a file, not a directory");
+    else if (!dir.empty ())
+      read.checkOutput (dir);
+}
+}  // namespace apps
+}  // namespace agex

@@ -1,0 +1,71 @@
+// The timings agex_bench reports, at library level: the summary of repeated timings, the
+// depth pipeline with AGEX incremental against naive on the bundled frame, and the whole
+// detector over frames (stages in order, "total" last, progress per frame, no frames refused).
+
+#include "test_support.h"
+
+#include <agex/detection/benchmark.h>
+#include <agex/io/frame_io.h>
+
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace
+{
+using namespace agex_test;
+
+const std::string kFrame = AGEX_SOURCE_DIR "/data/frames/bonn_1_002.png";
+const std::string kModel = AGEX_SOURCE_DIR "/data/models/agex_bonn_agex.yml";
+
+TEST (Benchmark, TimingsSummariseToMeasuredSamples)
+{
+  const agex::TimingStats odd = agex::summariseTimings ({5.0, 1.0, 3.0, 2.0, 4.0});
+  EXPECT_DOUBLE_EQ (odd.median, 3.0);
+  EXPECT_DOUBLE_EQ (odd.p95, 5.0);
+  const agex::TimingStats even = agex::summariseTimings ({1.0, 2.0});
+  EXPECT_DOUBLE_EQ (even.median, 2.0) << "the upper middle sample, never a mean";
+  EXPECT_DOUBLE_EQ (even.p95, 2.0);
+  const agex::TimingStats none = agex::summariseTimings ({});
+  EXPECT_DOUBLE_EQ (none.median, 0.0);
+  EXPECT_DOUBLE_EQ (none.p95, 0.0);
+}
+
+TEST (Benchmark, DepthPipelineAndBothAgexModesOnTheBundledFrame)
+{
+  const agex::Frame frame = agex::loadFrame (kFrame);
+  const agex::DepthPipelineBenchmark bench =
+      agex::benchmarkDepthPipeline (frame.cloud, agex::DepthPipelineParams (), 5, 2);
+  EXPECT_GE (bench.meshes, 1u);
+  EXPECT_GT (bench.mesh_points, 0u);
+  EXPECT_GT (bench.points, 0u);
+  EXPECT_LE (bench.points, 5u * bench.meshes) << "AGEX_5: at most five points a mesh";
+  EXPECT_TRUE (bench.identical) << "the incremental Dijkstra gives the naive reference's points";
+  ASSERT_FALSE (bench.pipeline.empty ());
+  EXPECT_EQ (bench.pipeline.back ().first, "total");
+  EXPECT_GE (bench.agex_naive.p95, bench.agex_naive.median);
+}
+
+TEST (Benchmark, DetectorStagesOverFrames)
+{
+  EXPECT_THROW (agex::benchmarkDetector ({}, [] (agex::BodyPartDetector<pcl::PointXYZ> &) {}, 525.f, 525.f, 1),
+                std::invalid_argument);
+  AGEX_REQUIRE_SHARED_FILE (kModel, "the bundled AGEX model");
+  const auto model = std::make_shared<const agex::DetectorModel> (agex::DetectorModel::load (kModel));
+  const agex::DetectorSetup setup = [&] (agex::BodyPartDetector<pcl::PointXYZ> &detector) {
+    detector.setModel (model);
+  };
+  const agex::Frame frame = agex::loadFrame (kFrame);
+  const std::vector<pcl::PointCloud<pcl::PointXYZ>::ConstPtr> clouds{frame.cloud, frame.cloud};
+  std::vector<std::size_t> steps;
+  const agex::DetectorBenchmark bench = agex::benchmarkDetector (
+      clouds, setup, 525.f, 525.f, 2, [&] (std::size_t done, std::size_t) { steps.push_back (done); });
+  EXPECT_EQ (steps, (std::vector<std::size_t>{1, 2}));
+  ASSERT_GE (bench.stages.size (), 2u);
+  EXPECT_EQ (bench.stages.back ().first, "total");
+  EXPECT_DOUBLE_EQ (bench.stages.back ().second.median, bench.total.median);
+  EXPECT_GT (bench.total.median, 0.0);
+  const auto one = agex::timeDetection (frame.cloud, setup, 525.f, 525.f);
+  EXPECT_EQ (one.size (), bench.stages.size ());
+}
+}  // namespace

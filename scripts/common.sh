@@ -5,13 +5,16 @@ AGEX_ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 AGEX_BUILD_DIR="${AGEX_BUILD_DIR:-$AGEX_ROOT/build}"
 AGEX_JOBS="${AGEX_JOBS:-$(nproc 2>/dev/null || echo 2)}"
 
-# Debian 12 packages agex builds and tests with (clang and its runtimes: the fuzzers).
+# Debian 12 packages agex builds and tests with (OpenMPI: the distributed batch mode;
+# pybind11, NumPy, pytest: the Python module and its tests; clang and its runtimes: the fuzzers).
 AGEX_PACKAGES=(
   g++ make cmake pkg-config
   libpcl-dev libeigen3-dev libflann-dev
-  libopencv-dev
-  libboost-program-options-dev
+  libopencv-dev libopencv-contrib-dev
+  libboost-program-options-dev libboost-iostreams-dev
   nlohmann-json3-dev
+  libopenmpi-dev openmpi-bin
+  python3-dev python3-numpy python3-pybind11 python3-pytest
   libgtest-dev
   libdlib-dev
   clang libclang-rt-14-dev

@@ -26,6 +26,7 @@ timeAgex (const Cloud::Ptr &cloud, const DepthPipelineResult &prepared, const De
   agex.setMeshes (prepared.meshes);
   agex.setPointsPerMesh (k);
   agex.setDeltaConnected (params.delta_connected);
+  agex.setDeltaConnectedGrowth (1.5f * params.depth_step_growth);
   agex.setDeltaOrient (params.delta_orient);
   agex.setMinMeshSize (1);
   agex.setMode (naive ? Keypoint::Mode::Naive : Keypoint::Mode::Incremental);

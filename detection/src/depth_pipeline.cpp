@@ -66,6 +66,7 @@ DepthPipelineParams::validate (const Namer &name) const
   checkRange (name, "spur_iterations", spur_iterations, -1, 64);  // -1: auto
   checkRange (name, "spur_depth", spur_depth, 0, 0.5, true);
   checkRange (name, "delta_connected", delta_connected, 0, 0.3, true);
+  checkRange (name, "depth_step_growth", depth_step_growth, 0, 0.02);
   checkRange (name, "min_mesh_size", min_mesh_size, -1, 1e8);  // -1: auto
   checkRange (name, "k", k, 1, 200);
   checkRange (name, "delta_orient", delta_orient, 0, 1);
@@ -100,6 +101,7 @@ DepthPipelineParams::toJson () const
           {"spur_iterations", spur_iterations},
           {"spur_depth", spur_depth},
           {"delta_connected", delta_connected},
+          {"depth_step_growth", depth_step_growth},
           {"min_mesh_size", min_mesh_size},
           {"k", k},
           {"delta_orient", delta_orient}};
@@ -165,6 +167,8 @@ DepthPipelineParams::fromJson (const nlohmann::json &doc, const std::string &sou
   q.spur_iterations = integer ("spur_iterations", -kWide, kWide);
   q.spur_depth = static_cast<float> (number ("spur_depth", -kWide, kWide));
   q.delta_connected = static_cast<float> (number ("delta_connected", -kWide, kWide));
+  // Earlier models used fixed thresholds at every depth.
+  q.depth_step_growth = doc.contains ("depth_step_growth") ? static_cast<float> (number ("depth_step_growth", -kWide, kWide)) : 0.f;
   q.min_mesh_size = integer ("min_mesh_size", -kWide, kWide);
   q.k = integer ("k", -kWide, kWide);
   q.delta_orient = static_cast<float> (number ("delta_orient", -kWide, kWide));

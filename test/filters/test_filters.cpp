@@ -3,6 +3,7 @@
 
 #include "test_support.h"
 
+#include <agex/common/organized_neighbourhood.h>
 #include <agex/filters/mixed_pixel_filter.h>
 #include <agex/filters/spur_filter.h>
 #include <agex/filters/surface_segmentation.h>
@@ -823,5 +824,61 @@ TEST (SpurFilter, UnorganizedEmptyAllNanOrBadParametersGiveEmptyOutput)
     EXPECT_TRUE (spurKept (comb.cloud, iterations, min_connected, delta).empty ());
   }
   EXPECT_FALSE (spurKept (comb.cloud, 3, 6, 0.05f).empty ()) << "control";
+}
+}  // namespace
+
+namespace
+{
+/** A slanted plane at about 4.5 m as a structured-light camera sees it: depth in steps of
+  * 0.0029 z^2 (6 cm), so neighbours across a step are 6 cm apart in depth. */
+Cloud::Ptr
+quantisedSlopeAtFourAndAHalfMetres ()
+{
+  auto cloud = nanCloud (60, 40);
+  for (int v = 0; v < 40; ++v)
+    for (int u = 0; u < 60; ++u)
+    {
+      const float exact = 4.3f + 0.012f * u;  // 1.2 cm deeper per pixel: a step every ~5 pixels
+      const float step = 0.0029f * exact * exact;
+      const float z = step * std::round (exact / step);
+      (*cloud) (u, v) = pcl::PointXYZ ((u - 30) * z / 525.f, (v - 20) * z / 525.f, z);
+    }
+  return cloud;
+}
+
+TEST (DepthGrowingConnectivity, AQuantisedFarSurfaceIsOneMeshAndKeepsItsPoints)
+{
+  const auto cloud = quantisedSlopeAtFourAndAHalfMetres ();
+  // A fixed 3 cm cuts the surface at every depth step.
+  Segmentation fixed;
+  fixed.setInputCloud (cloud);
+  fixed.setDeltaConnected (0.03f);
+  std::vector<pcl::PointIndices> pieces;
+  fixed.segment (pieces);
+  EXPECT_GT (pieces.size (), 5u);
+  // Growing with the squared depth (1.5 steps), it is one surface again.
+  Segmentation growing;
+  growing.setInputCloud (cloud);
+  growing.setDeltaConnected (0.03f);
+  growing.setDeltaConnectedGrowth (0.0043f);
+  std::vector<pcl::PointIndices> meshes;
+  growing.segment (meshes);
+  ASSERT_EQ (meshes.size (), 1u);
+  EXPECT_EQ (meshes[0].indices.size (), cloud->size ());
+  // The spur filter erodes only the frame's border then, not every step's edge.
+  Spur spurs;
+  spurs.setInputCloud (cloud);
+  spurs.setDeltaConnected (0.03f);
+  spurs.setIterations (2);
+  pcl::Indices kept_fixed, kept_growing;
+  spurs.filter (kept_fixed);
+  spurs.setDeltaConnectedGrowth (0.0043f);
+  spurs.filter (kept_growing);
+  EXPECT_EQ (kept_growing.size (), static_cast<std::size_t> ((60 - 4) * (40 - 4)));
+  EXPECT_LT (kept_fixed.size (), kept_growing.size () / 2);
+  // Near the camera the fixed delta still decides: growth 0.0043 at 2 m is 1.7 cm < 3 cm.
+  EXPECT_TRUE (agex::connectedNeighbours (pcl::PointXYZ (0.f, 0.f, 2.f), pcl::PointXYZ (0.f, 0.f, 2.029f), 0.03f, 0.0043f));
+  EXPECT_FALSE (agex::connectedNeighbours (pcl::PointXYZ (0.f, 0.f, 2.f), pcl::PointXYZ (0.f, 0.f, 2.031f), 0.03f, 0.0043f));
+  EXPECT_TRUE (agex::connectedNeighbours (pcl::PointXYZ (0.f, 0.f, 5.f), pcl::PointXYZ (0.f, 0.f, 5.1f), 0.03f, 0.0043f));
 }
 }  // namespace

@@ -109,6 +109,9 @@ pipelineOptionsDescription (DepthPipelineParams &p, std::vector<std::string> &st
     ("k", po::value (&p.k)->default_value (p.k), "AGEX points per mesh, centroid included")
     ("delta-connected", floatValue (&p.delta_connected),
      "largest 3D gap between connected neighbour pixels, metres")
+    ("depth-step-growth", floatValue (&p.depth_step_growth),
+     "the sensor's depth steps, metres per squared metre of depth (Kinect 0.0029; 0: exact depth): "
+     "connectivity and the mixed-pixel jump grow with them")
     ("delta-orient", floatValue (&p.delta_orient),
      "geodesic distance traced back for orientations, metres")
     ("min-mesh-size", po::value (&p.min_mesh_size)->default_value (p.min_mesh_size, "auto"),
@@ -158,6 +161,7 @@ pipelineFlagName (const std::string &key)
       {"floor_max_tilt_deg", "floor-max-tilt"}, {"floor_distance", "floor-distance"},
       {"spur_min_connected", "spur-min-connected"}, {"spur_iterations", "spur-iterations"},
       {"spur_depth", "spur-depth"},             {"delta_connected", "delta-connected"},
+      {"depth_step_growth", "depth-step-growth"},
       {"min_mesh_size", "min-mesh-size"},       {"k", "k"},
       {"delta_orient", "delta-orient"}};
   const auto it = flags.find (key);

@@ -4,6 +4,7 @@
 // one place so that a mesh found by one is exactly a connected graph for the other.
 
 #include <pcl/point_cloud.h>
+#include <algorithm>
 #include <cmath>
 
 namespace agex
@@ -28,6 +29,19 @@ squaredDistance3D (const PointT &a, const PointT &b)
 {
   const float dx = a.x - b.x, dy = a.y - b.y, dz = a.z - b.z;
   return dx * dx + dy * dy + dz * dz;
+}
+
+/** \brief Whether neighbours a and b are connected: their 3D distance is below
+  * max (delta, growth z^2), z the larger of their depths. A depth camera's steps grow with
+  * the square of the depth (a structured-light Kinect's are about 0.0029 z^2 metres), so a
+  * fixed delta that joins a surface at 2 m cuts it into pieces of single depth steps at 4 m.
+  * growth 0: the fixed delta of the paper. */
+template <typename PointT> inline bool
+connectedNeighbours (const PointT &a, const PointT &b, float delta, float growth)
+{
+  const float z = std::max (a.z, b.z);
+  const float limit = std::max (delta, growth * z * z);
+  return squaredDistance3D (a, b) < limit * limit;
 }
 
 /** \brief Calls edge(i, j, length) for every 8-neighbour pair (i, j) of an organized

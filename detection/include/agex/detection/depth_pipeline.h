@@ -51,6 +51,14 @@ struct DepthPipelineParams
   float spur_depth = 0.035f;
   // Surface meshes (agex::SurfaceSegmentation) and AGEX (agex::AGEXKeypoint).
   float delta_connected = 0.03f;
+  /** The sensor's depth resolution: one surface's neighbouring depths may differ by steps of
+    * depth_step_growth z^2 metres (a structured-light Kinect's: about 0.0029 z^2; 0: exact
+    * depth). Neighbours up to 1.5 steps apart stay connected (agex::connectedNeighbours, where
+    * that is more than delta_connected) and jumps under 2.5 steps are no silhouette for the
+    * mixed-pixel filter (where that is more than mixed_min_jump), so that a person at 3-6 m
+    * is not cut into single depth steps and eroded away. Up to 2.6 m the fixed thresholds are
+    * the larger. Models trained before this setting: 0. */
+  float depth_step_growth = 0.0029f;
   int min_mesh_size = -1;  ///< points; negative: 0.1% of the frame's pixels
   int k = 5;               ///< AGEX points per mesh, centroid included
   float delta_orient = 0.10f;

@@ -59,6 +59,12 @@ public:
   void setMinJump (float metres) { min_jump_ = metres; }
   float getMinJump () const { return min_jump_; }
 
+  /** The smallest jump grows with the range r of the tested point as max (min jump,
+    * growth r^2) (metres per square metre; default 0: fixed): a structured-light camera's
+    * depth steps grow so, and a slanted surface shows a few of them within the window. */
+  void setMinJumpGrowth (float per_square_metre) { min_jump_growth_ = per_square_metre; }
+  float getMinJumpGrowth () const { return min_jump_growth_; }
+
   /** Largest angle in degrees between the jump and the viewing ray (default 15). */
   void setMaxVeilAngle (float degrees) { max_veil_angle_deg_ = degrees; }
   float getMaxVeilAngle () const { return max_veil_angle_deg_; }
@@ -81,6 +87,7 @@ private:
 
   int window_radius_ = 2;
   float min_jump_ = 0.05f;
+  float min_jump_growth_ = 0.f;
   float max_veil_angle_deg_ = 15.f;
   float interior_margin_ = 0.1f;
   std::vector<float> ranges_;  // per run: distance of each point from the sensor

@@ -50,6 +50,10 @@ public:
   /** Largest 3D distance between connected neighbours, metres (default 0.05). */
   void setDeltaConnected (float metres) { delta_connected_ = metres; }
   float getDeltaConnected () const { return delta_connected_; }
+  /** The connection limit grows with depth as max (delta, growth z^2) (metres per square
+    * metre of depth, default 0: fixed; agex::connectedNeighbours). */
+  void setDeltaConnectedGrowth (float per_square_metre) { delta_connected_growth_ = per_square_metre; }
+  float getDeltaConnectedGrowth () const { return delta_connected_growth_; }
 
 protected:
   void applyFilter (pcl::Indices &indices) override;
@@ -58,6 +62,7 @@ private:
   int min_connected_ = 6;
   int iterations_ = 3;
   float delta_connected_ = 0.05f;
+  float delta_connected_growth_ = 0.f;
 };
 }  // namespace agex
 

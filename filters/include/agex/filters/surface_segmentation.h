@@ -35,6 +35,10 @@ public:
   /** Largest 3D distance in metres between connected neighbours (default 0.05). */
   void setDeltaConnected (float metres) { delta_connected_ = metres; }
   float getDeltaConnected () const { return delta_connected_; }
+  /** The connection limit grows with depth as max (delta, growth z^2) (metres per square
+    * metre of depth, default 0: fixed; agex::connectedNeighbours). */
+  void setDeltaConnectedGrowth (float per_square_metre) { delta_connected_growth_ = per_square_metre; }
+  float getDeltaConnectedGrowth () const { return delta_connected_growth_; }
 
   /** Meshes with fewer points are dropped (default 1: keep all). */
   void setMinMeshSize (std::size_t points) { min_mesh_size_ = points; }
@@ -56,6 +60,7 @@ protected:
 
 private:
   float delta_connected_ = 0.05f;
+  float delta_connected_growth_ = 0.f;
   std::size_t min_mesh_size_ = 1;
   std::size_t max_mesh_size_ = std::numeric_limits<std::size_t>::max ();
 };

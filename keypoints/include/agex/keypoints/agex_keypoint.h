@@ -65,6 +65,10 @@ public:
   /** Edge length limit in metres for the geodesic graph (default 0.05). */
   void setDeltaConnected (float metres) { delta_connected_ = metres; }
   float getDeltaConnected () const { return delta_connected_; }
+  /** The connection limit grows with depth as max (delta, growth z^2) (metres per square
+    * metre of depth, default 0: fixed; agex::connectedNeighbours). */
+  void setDeltaConnectedGrowth (float per_square_metre) { delta_connected_growth_ = per_square_metre; }
+  float getDeltaConnectedGrowth () const { return delta_connected_growth_; }
 
   /** Geodesic distance in metres traced back for the orientation (default 0.10). */
   void setDeltaOrient (float metres) { delta_orient_ = metres; }
@@ -127,6 +131,8 @@ private:
 
   int k_per_mesh_ = 5;
   float delta_connected_ = 0.05f;
+  float delta_connected_growth_ = 0.f;
+  float max_edge_ = 0.f;  ///< the longest edge of the mesh being processed (the bucket queue's range)
   float delta_orient_ = 0.10f;
   std::size_t min_mesh_size_ = 50;
   Mode mode_ = Mode::Incremental;

@@ -126,6 +126,7 @@ agex::DepthPipeline<PointT>::compute (DepthPipelineResult &result)
     mixed.setIndices (inside);
     mixed.setWindowRadius (params.mixed_window_radius);
     mixed.setMinJump (params.mixed_min_jump);
+    mixed.setMinJumpGrowth (2.5f * params.depth_step_growth);
     mixed.setMaxVeilAngle (params.mixed_max_veil_angle_deg);
     mixed.setNegative (true);  // the mixed pixels themselves, to blank them
     pcl::Indices flying;
@@ -190,6 +191,7 @@ agex::DepthPipeline<PointT>::compute (DepthPipelineResult &result)
     spurs.setMinConnected (params.spur_min_connected);
     spurs.setIterations (spur_iterations);
     spurs.setDeltaConnected (params.delta_connected);
+    spurs.setDeltaConnectedGrowth (1.5f * params.depth_step_growth);
     spurs.setNegative (true);  // the spur points themselves, to blank them
     pcl::Indices removed;
     spurs.filter (removed);
@@ -207,6 +209,7 @@ agex::DepthPipeline<PointT>::compute (DepthPipelineResult &result)
     agex::SurfaceSegmentation<pcl::PointXYZ> segmentation;
     segmentation.setInputCloud (cloud);
     segmentation.setDeltaConnected (params.delta_connected);
+    segmentation.setDeltaConnectedGrowth (1.5f * params.depth_step_growth);
     segmentation.setMinMeshSize (static_cast<std::size_t> (min_mesh));
     segmentation.segment (result.meshes);
   }
@@ -221,6 +224,7 @@ agex::DepthPipeline<PointT>::compute (DepthPipelineResult &result)
     agex.setMeshes (result.meshes);
     agex.setPointsPerMesh (params.k);
     agex.setDeltaConnected (params.delta_connected);
+    agex.setDeltaConnectedGrowth (1.5f * params.depth_step_growth);
     agex.setDeltaOrient (params.delta_orient);
     agex.setMinMeshSize (static_cast<std::size_t> (min_mesh));
     agex.setMode (params.naive ? agex::AGEXKeypoint<pcl::PointXYZ>::Mode::Naive

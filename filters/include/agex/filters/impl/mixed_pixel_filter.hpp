@@ -21,6 +21,7 @@ agex::MixedPixelFilter<PointT>::isMixed (int index, const float *ranges, float c
   if (!(range_p > 0.f))
     return false;
   const Eigen::Vector3f ray = p.getVector3fMap () / range_p;
+  const float min_jump = std::max (min_jump_, min_jump_growth_ * range_p * range_p);
 
   for (const auto &d : kForwardNeighbours)
     for (int r = 1; r <= window_radius_; ++r)
@@ -37,7 +38,7 @@ agex::MixedPixelFilter<PointT>::isMixed (int index, const float *ranges, float c
         continue;
       const float r1 = range (i1), r2 = range (i2);
       const float jump = std::abs (r2 - r1);
-      if (!(jump >= min_jump_))
+      if (!(jump >= min_jump))
         continue;
       const float lo = std::min (r1, r2), hi = std::max (r1, r2);
       const float margin = interior_margin_ * jump;
@@ -63,7 +64,7 @@ agex::MixedPixelFilter<PointT>::applyFilter (pcl::Indices &indices)
                getClassName ().c_str (), input_->height);
     return;
   }
-  if (window_radius_ < 1 || !(min_jump_ > 0.f) || !(max_veil_angle_deg_ > 0.f && max_veil_angle_deg_ < 90.f) ||
+  if (window_radius_ < 1 || !(min_jump_ > 0.f) || !(min_jump_growth_ >= 0.f) || !std::isfinite (min_jump_growth_) || !(max_veil_angle_deg_ > 0.f && max_veil_angle_deg_ < 90.f) ||
       !(interior_margin_ >= 0.f && interior_margin_ < 0.5f))
   {
     PCL_ERROR ("[agex::%s::applyFilter] Invalid parameters: window radius %d (>= 1), min jump %g (> 0), "

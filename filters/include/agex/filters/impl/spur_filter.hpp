@@ -16,7 +16,8 @@ agex::SpurFilter<PointT>::applyFilter (pcl::Indices &indices)
                "found on the pixel grid.\n", getClassName ().c_str (), input_->height);
     return;
   }
-  if (min_connected_ < 0 || min_connected_ > 8 || iterations_ < 0 || !(delta_connected_ > 0.f))
+  if (min_connected_ < 0 || min_connected_ > 8 || iterations_ < 0 || !(delta_connected_ > 0.f) ||
+      !(delta_connected_growth_ >= 0.f) || !std::isfinite (delta_connected_growth_))
   {
     PCL_ERROR ("[agex::%s::applyFilter] Invalid parameters: min connected %d (0-8), iterations %d (>= 0), "
                "delta_connected %g (> 0).\n", getClassName ().c_str (), min_connected_, iterations_, delta_connected_);
@@ -24,8 +25,6 @@ agex::SpurFilter<PointT>::applyFilter (pcl::Indices &indices)
   }
   const auto &cloud = *input_;
   const int width = static_cast<int> (cloud.width), height = static_cast<int> (cloud.height);
-  const float max_sq = delta_connected_ * delta_connected_;
-
   std::vector<unsigned char> kept (cloud.size (), 0);
   std::vector<int> alive;
   for (const auto i : *indices_)
@@ -50,7 +49,7 @@ agex::SpurFilter<PointT>::applyFilter (pcl::Indices &indices)
       if (nu < 0 || nu >= width || nv < 0 || nv >= height)
         continue;
       const int j = nv * width + nu;
-      if (kept[j] && squaredDistance3D (cloud[i], cloud[j]) < max_sq)
+      if (kept[j] && connectedNeighbours (cloud[i], cloud[j], delta_connected_, delta_connected_growth_))
       {
         edges[i] |= static_cast<unsigned char> (1u << d);
         ++count[i];

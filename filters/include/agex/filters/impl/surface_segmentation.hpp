@@ -27,7 +27,8 @@ agex::SurfaceSegmentation<PointT>::segment (pcl::PointCloud<pcl::Label> &labels,
     deinitCompute ();
     return;
   }
-  if (!(delta_connected_ > 0.f) || min_mesh_size_ > max_mesh_size_)
+  if (!(delta_connected_ > 0.f) || !(delta_connected_growth_ >= 0.f) || !std::isfinite (delta_connected_growth_) ||
+      min_mesh_size_ > max_mesh_size_)
   {
     PCL_ERROR ("[agex::%s::segment] Invalid parameters: delta_connected %g must be > 0 and the "
                "minimum mesh size (%zu) at most the maximum (%zu).\n",
@@ -45,7 +46,6 @@ agex::SurfaceSegmentation<PointT>::segment (pcl::PointCloud<pcl::Label> &labels,
       selected[i] = 1;
 
   // Breadth-first flood fill over the connected 8-neighbours.
-  const float max_sq = delta_connected_ * delta_connected_;
   std::vector<int> component (n, -1);
   std::vector<pcl::PointIndices> found;
   std::vector<int> queue;
@@ -69,7 +69,8 @@ agex::SurfaceSegmentation<PointT>::segment (pcl::PointCloud<pcl::Label> &labels,
         if (nu < 0 || nu >= width || nv < 0 || nv >= height)
           continue;
         const int j = nv * width + nu;
-        if (!selected[j] || component[j] >= 0 || squaredDistance3D (cloud[i], cloud[j]) >= max_sq)
+        if (!selected[j] || component[j] >= 0 ||
+            !connectedNeighbours (cloud[i], cloud[j], delta_connected_, delta_connected_growth_))
           continue;
         component[j] = id;
         queue.push_back (j);

@@ -24,7 +24,8 @@ agex::AGEXKeypoint<PointInT, PointOutT>::initCompute ()
                "AGEX needs the pixel grid of a depth frame.\n", getClassName ().c_str (), input_->height);
     return false;
   }
-  if (k_per_mesh_ < 1 || !(delta_connected_ > 0.f) || !(delta_orient_ >= 0.f))
+  if (k_per_mesh_ < 1 || !(delta_connected_ > 0.f) || !(delta_orient_ >= 0.f) || !(delta_connected_growth_ >= 0.f) ||
+      !std::isfinite (delta_connected_growth_))
   {
     PCL_ERROR ("[agex::%s::initCompute] Invalid parameters: k %d (>= 1), delta_connected %g (> 0), "
                "delta_orient %g (>= 0).\n", getClassName ().c_str (), k_per_mesh_, delta_connected_, delta_orient_);
@@ -63,7 +64,7 @@ agex::AGEXKeypoint<PointInT, PointOutT>::buildGraph (const pcl::Indices &mesh, M
 
   graph.degree.assign (n, 0);
   graph.edges.resize (static_cast<std::size_t> (n) * 8);
-  const float max_sq = delta_connected_ * delta_connected_;
+  max_edge_ = delta_connected_;
   // Each undirected edge is measured once, from its first pixel in scan order.
   for (int vtx = 0; vtx < n; ++vtx)
   {
@@ -78,10 +79,10 @@ agex::AGEXKeypoint<PointInT, PointOutT>::buildGraph (const pcl::Indices &mesh, M
       const int other = point_to_vertex_[j];
       if (other < 0)
         continue;
-      const float sq = squaredDistance3D (cloud[i], cloud[j]);
-      if (!(sq < max_sq))
+      if (!connectedNeighbours (cloud[i], cloud[j], delta_connected_, delta_connected_growth_))
         continue;
-      const float length = std::sqrt (sq);
+      const float length = std::sqrt (squaredDistance3D (cloud[i], cloud[j]));
+      max_edge_ = std::max (max_edge_, length);
       const std::size_t a = static_cast<std::size_t> (vtx) * 8 + graph.degree[vtx]++;
       const std::size_t b = static_cast<std::size_t> (other) * 8 + graph.degree[other]++;
       graph.edges[a] = {other, length};
@@ -168,7 +169,7 @@ agex::AGEXKeypoint<PointInT, PointOutT>::runMesh (const MeshGraph &graph, int me
     sources.push_back (vtx);
 
     // Buckets 1/32 of the longest edge wide: nearly Dijkstra's order, few revisits.
-    queue_.reset (delta_connected_ / 32.f, delta_connected_);
+    queue_.reset (max_edge_ / 32.f, max_edge_);
     if (mode_ == Mode::Naive)
     {
       // Reference: forget everything and run a full multi-source Dijkstra.
@@ -227,6 +228,7 @@ agex::AGEXKeypoint<PointInT, PointOutT>::detectKeypoints (PointCloudOut &output)
     segmentation.setInputCloud (input_);
     segmentation.setIndices (indices_);
     segmentation.setDeltaConnected (delta_connected_);
+    segmentation.setDeltaConnectedGrowth (delta_connected_growth_);
     segmentation.setMinMeshSize (std::max<std::size_t> (1, min_mesh_size_));
     segmentation.segment (meshes_);
   }

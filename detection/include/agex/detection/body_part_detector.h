@@ -90,8 +90,9 @@ public:
     fy_ = fy;
   }
 
-  /** Pixel stride of the forest pass (1: every person pixel; 2: one per 2x2 cell, the rest
-    * copy it). */
+  /** Pixel stride of the forest pass in Forest mode (1: every person pixel; 2: one per 2x2
+    * cell, the rest copy it; 0: by the focal length, agex::forestStrideFor). A fused model
+    * uses the stride it was trained with (DetectorSettings::forest_stride). */
   void setForestStride (int stride) { forest_stride_ = stride; }
   int getForestStride () const { return forest_stride_; }
 

@@ -126,7 +126,10 @@ agex::BodyPartDetector<PointT>::labelParts ()
   if ((!(fx > 0.f) || !(fy > 0.f)) && prepared.filtered)
     fx = fy = DepthPatchEstimation<pcl::PointXYZ, DepthPatch>::estimateFocalLength (*prepared.filtered);
   used_fx_ = fx;
-  const int stride = settings_.kind == DetectorKind::Fused ? settings_.forest_stride : forest_stride_;
+  // The fused classifier was trained on part modes found at the model's stride; the forest
+  // alone (Forest mode) runs at the stride the user set.
+  const int stride = mode_ == DetectorMode::Model && settings_.kind == DetectorKind::Fused ? settings_.forest_stride
+                                                                                            : forest_stride_;
   std::pair<double, double> ms{0.0, 0.0};
   const bool ok = labelPersonParts (prepared, forest_, fx, fy, stride, part_labels_, part_modes_, &ms);
   // The focal-length fit and the labelling are the forest's; the mean shift is the modes'.

@@ -1,0 +1,68 @@
+#!/usr/bin/env bash
+# The table of doc/results.md, "The fused detector against every baseline", for one fold:
+# trains the four depth models of scripts/train_bundled_models.sh (same recipe) on the Bonn
+# sequences that are not TEST, then scores on TEST's keyframes, portrait and full view:
+# AGEX only, the sliding-window baseline, PCL's forest alone, our forest alone, fused.
+# Writes OUT/ev_<detector>_<view>.json (agex_eval detect reports) and prints the fold's table
+# (scripts/bonn_table.py). Folds already trained or scored in OUT are kept, so an interrupted
+# run resumes. About 20 minutes per fold on 2 cores.
+#   scripts/evaluate_bonn.sh OUT TEST [BUILD_DIR]      e.g. OUT=/tmp/split TEST=7,8
+# Leave-one-sequence-out: for s in 1 2 3 4 5 6 7 8; do scripts/evaluate_bonn.sh /tmp/loso/$s $s; done
+#                         scripts/bonn_table.py /tmp/loso/*
+set -euo pipefail
+ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+OUT=$1 TEST=$2
+BIN="${3:-$ROOT/build}/bin"
+BONN="$ROOT/../shared/data/bonn"
+PCL_FORESTS="$ROOT/../shared/data/pcl_people"
+[ -d "$BONN" ] || { echo "evaluate_bonn: $BONN is missing (the Bonn frames of ../shared)" >&2; exit 1; }
+[ -d "$PCL_FORESTS" ] || { echo "evaluate_bonn: $PCL_FORESTS is missing (PCL's forests of ../shared)" >&2; exit 1; }
+[[ $TEST =~ ^[1-8](,[1-8])*$ ]] || { echo "evaluate_bonn: TEST must be Bonn sequences such as 7,8, not '$TEST'" >&2; exit 1; }
+mkdir -p "$OUT"
+DATA="$OUT/../bonn-datasets"
+for view in portrait full; do
+  [ -f "$DATA/bonn-$view/dataset.json" ] || "$BIN/agex_convert" bonn --input "$BONN" --output "$DATA/bonn-$view" --view "$view"
+done
+TRAIN=$(seq 1 8 | grep -vxF -f <(echo "$TEST" | tr ',' '\n') | paste -sd,)
+echo "evaluate_bonn: train on $TRAIN, test on the keyframes of $TEST"
+both () { echo --dataset "$DATA/bonn-full@$1" --dataset "$DATA/bonn-portrait@$1"; }
+FOREST_FLAGS=(--hand-reach 0.12 --threads 2)
+RECIPE=(--k 16 --weak-count 200 --fragments 100 --random-negatives 3)
+# Writes to a temporary name first, so that an interrupted step is redone, not kept half-made.
+made () { [ -s "$1" ]; }
+
+made "$OUT/forest.agexforest" || { "$BIN/agex_train_forest" $(both "$TRAIN") "${FOREST_FLAGS[@]}" --out "$OUT/forest.tmp.agexforest" \
+  && mv "$OUT/forest.tmp.agexforest" "$OUT/forest.agexforest"; }
+# Cross-fitting as for the bundled model: the training sequences in groups of two, each
+# group's frames labelled by a forest trained without it.
+fold_args=()
+groups=$(echo "$TRAIN" | tr ',' '\n' | paste -d, - - | sed 's/,$//')
+for group in $groups; do
+  rest=$(echo "$TRAIN" | tr ',' '\n' | grep -vxF -f <(echo "$group" | tr ',' '\n') | paste -sd,)
+  f="$OUT/forest_without_${group//,/}.agexforest"
+  made "$f" || { "$BIN/agex_train_forest" $(both "$rest") "${FOREST_FLAGS[@]}" --out "$f.tmp" && mv "$f.tmp" "$f"; }
+  for view in full portrait; do
+    fold_args+=(--dataset "$DATA/bonn-$view@$group" --dataset-forest "$DATA/bonn-$view@$group=$f")
+  done
+done
+made "$OUT/fused.yml" || { "$BIN/agex_train" --fused --forest "$OUT/forest.agexforest" "${fold_args[@]}" "${RECIPE[@]}" \
+  --out "$OUT/fused.tmp.yml" && mv "$OUT/fused.tmp.yml" "$OUT/fused.yml"; }
+made "$OUT/agex.yml" || { "$BIN/agex_train" $(both "$TRAIN") "${RECIPE[@]}" --out "$OUT/agex.tmp.yml" \
+  && mv "$OUT/agex.tmp.yml" "$OUT/agex.yml"; }
+made "$OUT/sw.yml" || { "$BIN/agex_train" --sliding-window $(both "$TRAIN") --weak-count 300 --fragments 150 \
+  --out "$OUT/sw.tmp.yml" && mv "$OUT/sw.tmp.yml" "$OUT/sw.yml"; }
+
+for view in portrait full; do
+  set_="$DATA/bonn-$view@$TEST"
+  score () {
+    local name=$1; shift
+    made "$OUT/ev_${name}_$view.json" || "$BIN/agex_eval" detect --dataset "$set_" --keyframes "$@" \
+      --json "$OUT/ev_${name}_$view.json" > "$OUT/ev_${name}_$view.log"
+  }
+  score agex --model "$OUT/agex.yml"
+  score sw --model "$OUT/sw.yml"
+  score pcl_forest --model "$OUT/agex.yml" --detector-mode forest --forest "$PCL_FORESTS"
+  score our_forest --model "$OUT/agex.yml" --detector-mode forest --forest "$OUT/forest.agexforest"
+  score fused --model "$OUT/fused.yml"
+done
+python3 "$ROOT/scripts/bonn_table.py" "$OUT"

@@ -5,7 +5,8 @@
 # AGEX only, the sliding-window baseline, PCL's forest alone, our forest alone, fused.
 # Writes OUT/ev_<detector>_<view>.json (agex_eval detect reports) and prints the fold's table
 # (scripts/bonn_table.py). Folds already trained or scored in OUT are kept, so an interrupted
-# run resumes. About 20 minutes per fold on 2 cores.
+# run resumes. About 20 minutes per fold on 2 cores. The converted Bonn datasets (both views)
+# go to OUT/../bonn-datasets, shared by the folds beside OUT.
 #   scripts/evaluate_bonn.sh OUT TEST [BUILD_DIR]      e.g. OUT=/tmp/split TEST=7,8
 # Leave-one-sequence-out: for s in 1 2 3 4 5 6 7 8; do scripts/evaluate_bonn.sh /tmp/loso/$s $s; done
 #                         scripts/bonn_table.py /tmp/loso/*

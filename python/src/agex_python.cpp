@@ -242,7 +242,8 @@ frameFromArray (const py::array &input, double fx, double fy, double cx, double 
   const auto item = depth.itemsize ();
   if (!(depth.strides (1) == item && depth.strides (0) >= cols * item && depth.strides (0) % item == 0 &&
         reinterpret_cast<std::uintptr_t> (depth.data ()) % static_cast<std::uintptr_t> (item) == 0))
-    depth = py::array::ensure (depth, py::array::c_style);
+    // A fresh C-order copy: ensure (c_style) would hand back an unaligned array unchanged.
+    depth = py::array (depth.attr ("copy") ("C"));
   const cv::Mat image (static_cast<int> (rows), static_cast<int> (cols), type, const_cast<void *> (depth.data ()),
                        static_cast<std::size_t> (depth.strides (0)));
   auto result = std::make_shared<PyFrame> ();

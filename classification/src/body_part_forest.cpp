@@ -186,8 +186,6 @@ descendBatch (const BodyPartForest::Tree &tree, const ForestDepthImage &depth, c
 // coordinates of a node in one fused multiply-add (exactly PCL's GPU arithmetic, which the
 // generic path above emulates in double), truncated, offset and clamped together. Picked at
 // run time on processors that have them; the leaves are the same.
-#pragma GCC push_options
-#pragma GCC target("avx2,fma")
 }  // namespace
 }  // namespace agex
 #include <immintrin.h>
@@ -195,7 +193,30 @@ namespace agex
 {
 namespace
 {
-void
+// A function attribute, not #pragma GCC target: clang ignores the pragma, and a lambda does
+// not inherit its enclosing function's target, so the intrinsics live in fmaStep.
+#define AGEX_TARGET_AVX2_FMA __attribute__ ((target ("avx2,fma")))
+
+struct FmaProbe
+{
+  __m128i origin, top, row, zero;
+  const std::uint16_t *img;
+};
+
+AGEX_TARGET_AVX2_FMA inline bool
+fmaStep (const FmaProbe &p, __m128 scale, __m128 base, const BodyPartForest::Node &node)
+{
+  const __m128i off16 = _mm_loadl_epi64 (reinterpret_cast<const __m128i *> (&node));
+  const __m128 off = _mm_cvtepi32_ps (_mm_cvtepi16_epi32 (off16));
+  __m128i c = _mm_cvttps_epi32 (_mm_fmadd_ps (off, scale, base));
+  c = _mm_min_epi32 (_mm_max_epi32 (_mm_sub_epi32 (c, p.origin), p.zero), p.top);
+  const __m128i idx = _mm_hadd_epi32 (_mm_mullo_epi32 (c, p.row), p.zero);
+  const int d1 = p.img[_mm_cvtsi128_si32 (idx)];
+  const int d2 = p.img[_mm_extract_epi32 (idx, 1)];
+  return static_cast<float> (d1 - d2) > node.threshold;
+}
+
+AGEX_TARGET_AVX2_FMA void
 descendBatchFma (const BodyPartForest::Tree &tree, const ForestDepthImage &depth, const int *u, const int *v,
                  const float *su, const float *sv, int n, int *leaf)
 {
@@ -217,16 +238,8 @@ descendBatchFma (const BodyPartForest::Tree &tree, const ForestDepthImage &depth
                            static_cast<float> (v[i]));
     at[i] = 0;
   }
-  auto step = [&] (int i, const BodyPartForest::Node &node) {
-    const __m128i off16 = _mm_loadl_epi64 (reinterpret_cast<const __m128i *> (&node));
-    const __m128 off = _mm_cvtepi32_ps (_mm_cvtepi16_epi32 (off16));
-    __m128i c = _mm_cvttps_epi32 (_mm_fmadd_ps (off, scale[i], base[i]));
-    c = _mm_min_epi32 (_mm_max_epi32 (_mm_sub_epi32 (c, origin), zero), top);
-    const __m128i idx = _mm_hadd_epi32 (_mm_mullo_epi32 (c, row), zero);
-    const int d1 = img[_mm_cvtsi128_si32 (idx)];
-    const int d2 = img[_mm_extract_epi32 (idx, 1)];
-    return static_cast<float> (d1 - d2) > node.threshold;
-  };
+  const FmaProbe probe{origin, top, row, zero, img};
+  auto step = [&] (int i, const BodyPartForest::Node &node) { return fmaStep (probe, scale[i], base[i], node); };
   if (tree.complete)
   {
     const int last = tree.depth - 1;
@@ -261,7 +274,6 @@ descendBatchFma (const BodyPartForest::Tree &tree, const ForestDepthImage &depth
   for (int i = 0; i < n; ++i)
     leaf[i] = -children[at[i]] - 1;
 }
-#pragma GCC pop_options
 
 bool
 haveFma ()

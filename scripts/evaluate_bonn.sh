@@ -9,7 +9,7 @@
 # go to OUT/../bonn-datasets, shared by the folds beside OUT.
 #   scripts/evaluate_bonn.sh OUT TEST [BUILD_DIR]      e.g. OUT=/tmp/split TEST=7,8
 # Leave-one-sequence-out: for s in 1 2 3 4 5 6 7 8; do scripts/evaluate_bonn.sh /tmp/loso/$s $s; done
-#                         scripts/bonn_table.py /tmp/loso/*
+#                         scripts/bonn_table.py /tmp/loso/[0-9]*
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 OUT=$1 TEST=$2

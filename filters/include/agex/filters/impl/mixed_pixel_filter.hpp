@@ -64,12 +64,13 @@ agex::MixedPixelFilter<PointT>::applyFilter (pcl::Indices &indices)
                getClassName ().c_str (), input_->height);
     return;
   }
-  if (window_radius_ < 1 || !(min_jump_ > 0.f) || !(min_jump_growth_ >= 0.f) || !std::isfinite (min_jump_growth_) || !(max_veil_angle_deg_ > 0.f && max_veil_angle_deg_ < 90.f) ||
-      !(interior_margin_ >= 0.f && interior_margin_ < 0.5f))
+  if (window_radius_ < 1 || !(min_jump_ > 0.f) || !(min_jump_growth_ >= 0.f) || !std::isfinite (min_jump_growth_) ||
+      !(max_veil_angle_deg_ > 0.f && max_veil_angle_deg_ < 90.f) || !(interior_margin_ >= 0.f && interior_margin_ < 0.5f))
   {
     PCL_ERROR ("[agex::%s::applyFilter] Invalid parameters: window radius %d (>= 1), min jump %g (> 0), "
-               "max veil angle %g (0-90 degrees), interior margin %g (0-0.5).\n",
-               getClassName ().c_str (), window_radius_, min_jump_, max_veil_angle_deg_, interior_margin_);
+               "min jump growth %g (finite, >= 0), max veil angle %g (0-90 degrees), interior margin %g (0-0.5).\n",
+               getClassName ().c_str (), window_radius_, min_jump_, min_jump_growth_, max_veil_angle_deg_,
+               interior_margin_);
     return;
   }
   const float cos_max_veil_angle = cosMaxVeilAngle ();

@@ -20,7 +20,8 @@ agex::SpurFilter<PointT>::applyFilter (pcl::Indices &indices)
       !(delta_connected_growth_ >= 0.f) || !std::isfinite (delta_connected_growth_))
   {
     PCL_ERROR ("[agex::%s::applyFilter] Invalid parameters: min connected %d (0-8), iterations %d (>= 0), "
-               "delta_connected %g (> 0).\n", getClassName ().c_str (), min_connected_, iterations_, delta_connected_);
+               "delta_connected %g (> 0), its growth %g (finite, >= 0).\n", getClassName ().c_str (), min_connected_,
+               iterations_, delta_connected_, delta_connected_growth_);
     return;
   }
   const auto &cloud = *input_;

@@ -30,9 +30,9 @@ agex::SurfaceSegmentation<PointT>::segment (pcl::PointCloud<pcl::Label> &labels,
   if (!(delta_connected_ > 0.f) || !(delta_connected_growth_ >= 0.f) || !std::isfinite (delta_connected_growth_) ||
       min_mesh_size_ > max_mesh_size_)
   {
-    PCL_ERROR ("[agex::%s::segment] Invalid parameters: delta_connected %g must be > 0 and the "
-               "minimum mesh size (%zu) at most the maximum (%zu).\n",
-               getClassName ().c_str (), delta_connected_, min_mesh_size_, max_mesh_size_);
+    PCL_ERROR ("[agex::%s::segment] Invalid parameters: delta_connected %g must be > 0, its growth %g finite "
+               "and >= 0, and the minimum mesh size (%zu) at most the maximum (%zu).\n",
+               getClassName ().c_str (), delta_connected_, delta_connected_growth_, min_mesh_size_, max_mesh_size_);
     deinitCompute ();
     return;
   }

@@ -28,7 +28,8 @@ agex::AGEXKeypoint<PointInT, PointOutT>::initCompute ()
       !std::isfinite (delta_connected_growth_))
   {
     PCL_ERROR ("[agex::%s::initCompute] Invalid parameters: k %d (>= 1), delta_connected %g (> 0), "
-               "delta_orient %g (>= 0).\n", getClassName ().c_str (), k_per_mesh_, delta_connected_, delta_orient_);
+               "its growth %g (finite, >= 0), delta_orient %g (>= 0).\n", getClassName ().c_str (), k_per_mesh_,
+               delta_connected_, delta_connected_growth_, delta_orient_);
     return false;
   }
   if (user_meshes_)

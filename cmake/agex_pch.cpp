@@ -1,0 +1,1 @@
+// Compiles the precompiled headers (cmake/AgexPrecompiledHeaders.cmake); no code of its own.

@@ -17,7 +17,9 @@ if(AGEX_SANITIZE)
 endif()
 
 # AGEX_BUILD_FUZZERS=ON: everything gets libFuzzer's coverage instrumentation and the
-# sanitizers, so that the fuzzers (test/fuzz) see into the readers they call.
+# sanitizers, so that the fuzzers (test/fuzz) see into the readers they call. Line tables
+# (coming after the build type's -g, they replace it) are all a report's stack needs, and
+# cheaper to compile and link than full debug information of PCL's templates.
 if(AGEX_BUILD_FUZZERS)
   if(NOT CMAKE_CXX_COMPILER_ID MATCHES "Clang")
     message(FATAL_ERROR "AGEX_BUILD_FUZZERS needs clang (libFuzzer), e.g. -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_C_COMPILER=clang")
@@ -26,7 +28,7 @@ if(AGEX_BUILD_FUZZERS)
     message(FATAL_ERROR "AGEX_BUILD_FUZZERS needs AGEX_BUILD_TESTS=ON (the fuzzers live in test/fuzz)")
   endif()
   add_compile_options(-fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=undefined
-                      -fno-omit-frame-pointer -g -DEIGEN_MALLOC_ALREADY_ALIGNED=1)  # see above
+                      -fno-omit-frame-pointer -gline-tables-only -DEIGEN_MALLOC_ALREADY_ALIGNED=1)  # see above
   add_link_options(-fsanitize=address,undefined)
 endif()
 

@@ -12,14 +12,22 @@
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 
+# Each stage's time is printed, so that a slow suite shows where its time goes.
+stage () { echo "agex: $1 took $((SECONDS - stage_start)) s"; stage_start=$SECONDS; }
+stage_start=$SECONDS
 agex_install_dependencies
+stage "installing the dependencies"
 agex_build -DAGEX_BUILD_TESTS=ON
+stage "the Release build"
 ctest --test-dir "$AGEX_BUILD_DIR" --output-on-failure -j "$AGEX_JOBS"
+stage "the Release tests"
 
 if [ "${AGEX_SKIP_SANITIZE:-0}" != 1 ]; then
   echo "agex: the whole suite again under AddressSanitizer + UndefinedBehaviorSanitizer"
   AGEX_BUILD_DIR="$AGEX_ROOT/build-asan" agex_build -DAGEX_BUILD_TESTS=ON -DAGEX_SANITIZE=ON
+  stage "the sanitizer build"
   ctest --test-dir "$AGEX_ROOT/build-asan" --output-on-failure -j "$AGEX_JOBS"
+  stage "the sanitizer tests"
 fi
 
 if [ "${AGEX_SKIP_FUZZ:-0}" != 1 ]; then
@@ -30,7 +38,9 @@ if [ "${AGEX_SKIP_FUZZ:-0}" != 1 ]; then
       -DAGEX_BUILD_APPS=OFF -DAGEX_FUZZ_SECONDS="${AGEX_FUZZ_SECONDS:-60}" \
       -DAGEX_FUZZ_RUNS="${AGEX_FUZZ_RUNS:-20000}" >/dev/null
     cmake --build "$AGEX_ROOT/build-fuzz" --target agex_fuzzers -j "$AGEX_JOBS"
+    stage "the fuzzer build"
     ctest --test-dir "$AGEX_ROOT/build-fuzz" -L '^fuzz$' --output-on-failure -j "$AGEX_JOBS"
+    stage "fuzzing"
   else
     echo "agex: clang not found, fuzzers not run (the kept crashers were replayed above)"
   fi

@@ -967,6 +967,59 @@ TEST (PartModeEstimation, TwoHandsWithTipsAndDirections)
   EXPECT_FALSE (estimation.compute (labels, modes));
 }
 
+// pixel_step 2 (a forest pass at stride 2): only the pixels at even columns and rows are samples,
+// each standing for 4 pixels. The modes must be those of the same cloud with every other pixel
+// unlabelled, with 4 times the mass.
+TEST (PartModeEstimation, PixelStepTakesEveryOtherRowAndColumn)
+{
+  pcl::PointCloud<agex::BodyPartLabelPoint> labels (81, 61), representatives (81, 61);
+  const float f = 100.f;
+  for (int v = 0; v < 61; ++v)
+    for (int u = 0; u < 81; ++u)
+    {
+      agex::BodyPartLabelPoint q;
+      const bool body = u >= 35 && u < 45;
+      const bool hand_l = v >= 27 && v < 33 && u >= 25 && u < 35;
+      const bool hand_r = v >= 27 && v < 32 && u >= 45 && u < 53;
+      const bool foot = v >= 50 && v < 56 && u >= 36 && u < 47;
+      if (!body && !hand_l && !hand_r && !foot)
+        continue;
+      q.z = 2.f + 0.002f * static_cast<float> (u % 7);
+      q.x = (u - 40.f) * q.z / f;
+      q.y = (v - 30.f) * q.z / f;
+      q.p_head = 0.f;
+      q.p_hand = hand_l || hand_r ? 0.8f : 0.f;
+      q.p_foot = foot ? 0.7f : 0.f;
+      q.p_other = 1.f - q.p_hand - q.p_foot;
+      q.label = hand_l || hand_r ? agex::kLabelHand : foot ? agex::kLabelFoot : agex::kLabelOtherBody;
+      labels (u, v) = q;
+      if (u % 2 == 0 && v % 2 == 0)
+        representatives (u, v) = q;
+    }
+  agex::PartModeEstimation estimation;
+  agex::PartModeParams params;
+  params.fx = params.fy = f;
+  estimation.setParams (params);
+  std::vector<agex::PartMode> expected, modes;
+  ASSERT_TRUE (estimation.compute (representatives, expected));
+  params.pixel_step = 2;
+  estimation.setParams (params);
+  ASSERT_TRUE (estimation.compute (labels, modes));
+  ASSERT_EQ (modes.size (), 3u);  // two hands, one foot
+  ASSERT_EQ (modes.size (), expected.size ());
+  for (std::size_t i = 0; i < modes.size (); ++i)
+  {
+    EXPECT_EQ (modes[i].part, expected[i].part);
+    EXPECT_TRUE (modes[i].position.isApprox (expected[i].position, 1e-6f));
+    EXPECT_NEAR (modes[i].mass, 4.f * expected[i].mass, 1e-6f);
+    EXPECT_EQ (modes[i].support, expected[i].support);
+    EXPECT_EQ (modes[i].tip_index, expected[i].tip_index);
+    EXPECT_TRUE (modes[i].direction.isApprox (expected[i].direction, 1e-5f));
+    for (const auto index : modes[i].support)
+      EXPECT_TRUE (index % 81 % 2 == 0 && index / 81 % 2 == 0) << "pixel " << index << " is not a representative";
+  }
+}
+
 // --- training ----------------------------------------------------------------------------------
 
 namespace

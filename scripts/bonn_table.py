@@ -11,13 +11,18 @@ import statistics
 import sys
 
 DETECTORS = [("agex", "AGEX only"), ("sw", "sliding window"), ("pcl_forest", "PCL's forest alone"),
-             ("our_forest", "our forest alone"), ("fused", "fused")]
+             ("our_forest", "our forest alone"), ("fused", "fused"),
+             ("box", "fused, crop box instead of person isolation")]
+# Rows shown only where a fold has them (older fold folders lack the crop-box reports).
+OPTIONAL = {"box"}
 VIEWS = ["portrait", "full"]
 PARTS = ["head", "hand", "foot"]
 
 
 def load(fold, name, view):
     path = os.path.join(fold, f"ev_{name}_{view}.json")
+    if name in OPTIONAL and not os.path.exists(path):
+        return None
     try:
         with open(path) as f:
             return json.load(f)
@@ -61,7 +66,8 @@ def main(folds):
             if name == "fused":
                 fused = rows
             if not rows:
-                print(f"| {label} | (no reports) |")
+                if name not in OPTIONAL:
+                    print(f"| {label} | (no reports) |")
                 continue
             cells = [cell([r[f"ap_{p}"] for r in rows]) for p in PARTS]
             cells += [cell([r[f"top_{p}"] for r in rows]) for p in PARTS]

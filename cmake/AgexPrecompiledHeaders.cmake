@@ -21,24 +21,27 @@ set(AGEX_PCH_HEADERS
   <opencv2/core.hpp>
   <nlohmann/json.hpp>)
 
+# agex_add_precompiled_header(<name> <extra link target>... HEADERS <header>...): an object
+# library that only compiles the precompiled header, with the definitions of what it links.
+function(agex_add_precompiled_header name)
+  cmake_parse_arguments(ARG "" "" "HEADERS" ${ARGN})
+  add_library(${name} OBJECT ${PROJECT_SOURCE_DIR}/cmake/agex_pch.cpp)
+  target_link_libraries(${name} PRIVATE ${PCL_COMMON_LIBRARIES} opencv_core nlohmann_json::nlohmann_json
+    ${ARG_UNPARSED_ARGUMENTS})
+  target_compile_definitions(${name} PRIVATE ${PCL_DEFINITIONS})
+  set_target_properties(${name} PROPERTIES POSITION_INDEPENDENT_CODE ON)
+  target_precompile_headers(${name} PRIVATE ${AGEX_PCH_HEADERS} ${ARG_HEADERS})
+endfunction()
+
 if(AGEX_PRECOMPILED_HEADERS)
-  add_library(agex_pch OBJECT ${PROJECT_SOURCE_DIR}/cmake/agex_pch.cpp)
-  target_link_libraries(agex_pch PRIVATE ${PCL_COMMON_LIBRARIES} opencv_core nlohmann_json::nlohmann_json)
-  target_compile_definitions(agex_pch PRIVATE ${PCL_DEFINITIONS})
-  set_target_properties(agex_pch PROPERTIES POSITION_INDEPENDENT_CODE ON)
-  target_precompile_headers(agex_pch PRIVATE ${AGEX_PCH_HEADERS})
+  agex_add_precompiled_header(agex_pch)
 endif()
 
 # agex_add_test_precompiled_headers(): the GoogleTest executables' own precompiled header,
 # GoogleTest's header included (its definitions would spoil the other targets' one).
 function(agex_add_test_precompiled_headers)
   if(AGEX_PRECOMPILED_HEADERS AND NOT TARGET agex_pch_test)
-    add_library(agex_pch_test OBJECT ${PROJECT_SOURCE_DIR}/cmake/agex_pch.cpp)
-    target_link_libraries(agex_pch_test PRIVATE ${PCL_COMMON_LIBRARIES} opencv_core nlohmann_json::nlohmann_json
-      GTest::gtest)
-    target_compile_definitions(agex_pch_test PRIVATE ${PCL_DEFINITIONS})
-    set_target_properties(agex_pch_test PROPERTIES POSITION_INDEPENDENT_CODE ON)
-    target_precompile_headers(agex_pch_test PRIVATE ${AGEX_PCH_HEADERS} <gtest/gtest.h>)
+    agex_add_precompiled_header(agex_pch_test GTest::gtest HEADERS <gtest/gtest.h>)
   endif()
 endfunction()
 

@@ -240,14 +240,19 @@ public:
     * than the shoulders and hips below it (with hands on it too, 0.45 m against 0.65 m;
     * raised hands count each on their own; seen from the side, the head's 0.2 m against the
     * body's 0.3 m); a chair's back, a cabinet, a table, a lamp are as wide on top as below
-    * or wider, also when cut off by the image's side or seen from the side. */
-  void setCrownLimits (float drop, float ratio)
+    * or wider, also when cut off by the image's side or seen from the side. A crown at most
+    * min_width across (default 0.25 m, plus one bin of the measurement) is a head's whatever
+    * the width below it: a slim person seen from the side (the head's 0.2 m against a
+    * 0.25 m body) or bent forward. */
+  void setCrownLimits (float drop, float ratio, float min_width = 0.25f)
   {
     crown_drop_ = drop;
     max_crown_ratio_ = ratio;
+    min_crown_width_ = min_width;
   }
   float getCrownDrop () const { return crown_drop_; }
   float getMaxCrownRatio () const { return max_crown_ratio_; }
+  float getMinCrownWidth () const { return min_crown_width_; }
   /** Splitting: heads at least distance apart, with a valley at least depth below the lower,
     * and a cut column at most narrowing times as tall as the taller column on each side
     * (defaults 0.3 m, as pcl::people::HeadBasedSubclustering, 0.15 m and 0.7). */
@@ -368,7 +373,7 @@ private:
   float max_bottom_ = 1.1f;
   float max_width_ = 1.2f;
   float min_area_ = 0.12f;
-  float crown_drop_ = 0.05f, max_crown_ratio_ = 0.75f;
+  float crown_drop_ = 0.05f, max_crown_ratio_ = 0.75f, min_crown_width_ = 0.25f;
   float min_head_distance_ = 0.3f, min_valley_depth_ = 0.15f, max_narrowing_ = 0.7f;
   float merge_reach_ = 0.6f, merge_distance_ = 0.3f;
   float fallback_min_extent_ = 0.3f, min_background_fraction_ = 0.5f;

@@ -305,6 +305,7 @@ agex::PersonSegmentation<PointT>::validParameters () const
          non_negative (max_slope_) && positive (min_gap_) &&
          non_negative (min_top_) && positive (max_top_) && min_top_ < max_top_ && non_negative (max_bottom_) &&
          positive (max_width_) && non_negative (min_area_) && positive (crown_drop_) && positive (max_crown_ratio_) &&
+         non_negative (min_crown_width_) &&
          positive (min_head_distance_) && positive (min_valley_depth_) && max_narrowing_ > 0.f &&
          max_narrowing_ <= 1.f && non_negative (merge_reach_) &&
          non_negative (merge_distance_) && non_negative (fallback_min_extent_) && min_background_fraction_ >= 0.f &&
@@ -837,7 +838,8 @@ agex::PersonSegmentation<PointT>::verdict (const detail::PersonScan &scan, const
   }
   // The top narrower than the body below it; a top cut off by the image or hidden
   // behind something nearer says nothing.
-  if (s.head_width > max_crown_ratio_ * s.width_across && !(s.border & PersonInfo::kTop) &&
+  if (s.head_width > std::max (max_crown_ratio_ * s.width_across, min_crown_width_ + s.bin) &&
+      !(s.border & PersonInfo::kTop) &&
       2 * s.crown_hidden < s.crown)
     return PersonVerdict::kWideTop;
   if (!s.outlined)

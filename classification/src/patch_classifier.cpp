@@ -693,6 +693,12 @@ PatchClassifier::load (const std::string &path)
   if (yamlNestingBound (bytes, kMaxModelNesting, &deep_line) > kMaxModelNesting)
     throw ModelError (path + ":" + std::to_string (deep_line) + ": nested more than " +
                       std::to_string (kMaxModelNesting) + " levels deep; not an agex model (damaged or hostile)");
+  // OpenCV's parser decodes !!binary (base64) nodes, and loops for minutes on some damaged
+  // ones (a 238-byte file found by the model fuzzer); agex writes none.
+  const std::size_t binary = bytes.find ("!!binary");
+  if (binary != std::string::npos)
+    throw ModelError (path + ":" + std::to_string (1 + std::count (bytes.begin (), bytes.begin () + binary, '\n')) +
+                      ": base64 data (!!binary), which agex models never hold; not an agex model (damaged or hostile)");
 
   cv::FileStorage fs;
   try

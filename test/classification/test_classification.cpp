@@ -1032,6 +1032,18 @@ TEST (ModelFile, DeepNestingIsRefusedBeforeOpenCVParsesIt)
   EXPECT_GE (parsed, 10) << "most of the documents must be valid YAML for OpenCV, or the check proves little";
 }
 
+TEST (ModelFile, Base64BinaryNodesAreRefusedBeforeOpenCVParsesThem)
+{
+  // The model fuzzer's input on which OpenCV 4.6's parser loops for minutes (kept in
+  // test/fuzz/regressions/model/); refused before parsing, with its line.
+  const std::string kept = std::string (AGEX_SOURCE_DIR) + "/test/fuzz/regressions/model/base64_binary_loops_opencv_parser.yml";
+  expectModelError (kept, kept + ":4: base64 data (!!binary)");
+  TempDir dir;
+  const std::string path = dir.file ("binary.yml");
+  agex_test::writeAll (path, "%YAML:1.0\n---\nformat: agex-model\nweights: !!binary |\n  AAAA\nend: agex-model\n");
+  expectModelError (path, path + ":4: base64 data (!!binary)");
+}
+
 TEST (ModelFile, DeepMetadataAndFifosAreRefused)
 {
   const PatchClassifier &classifier = trainedClassifier ();

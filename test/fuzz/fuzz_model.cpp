@@ -37,8 +37,8 @@ void
 checkNestingBound (const std::string &yaml)
 {
   const std::size_t bound = agex::yamlNestingBound (yaml);
-  if (bound > agex::kMaxModelNesting)
-    return;  // refused before parsing
+  if (bound > agex::kMaxModelNesting || yaml.find ("!!binary") != std::string::npos)
+    return;  // refused before parsing (PatchClassifier::load)
   try
   {
     cv::FileStorage fs (yaml, cv::FileStorage::READ | cv::FileStorage::MEMORY | cv::FileStorage::FORMAT_YAML);

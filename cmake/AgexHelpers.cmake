@@ -15,6 +15,7 @@ function(agex_add_module name)
   target_link_libraries(${target} PUBLIC ${ARG_DEPENDS})
   target_compile_options(${target} PRIVATE -Wall -Wextra)
   agex_use_precompiled_headers(${target})
+  agex_use_fuzzer_coverage(${target} SOURCES ${ARG_SOURCES})
   set_target_properties(${target} PROPERTIES OUTPUT_NAME agex_${name} EXPORT_NAME ${name}
     VERSION ${PROJECT_VERSION} SOVERSION ${PROJECT_VERSION_MAJOR}.${PROJECT_VERSION_MINOR})
   # Installed as agex::<name> through agexConfig.cmake (top-level CMakeLists.txt), headers

@@ -374,8 +374,8 @@ TEST (PersonSegmentation, SlimPersonSeenFromTheSideIsAPerson)
   // ratio alone took it for a cabinet at most of these places.
   const DepthCamera cam;
   int by_ratio_found = 0, places = 0;
-  for (const double z : {1.8, 2.2, 2.6, 3.0, 3.5, 4.0})
-    for (const double x : {-0.3, 0.1, 0.3})
+  for (const double z : {1.8, 2.2, 3.0, 4.0})
+    for (const double x : {-0.3, 0.3})
     {
       SCOPED_TRACE ("at x " + std::to_string (x) + " m, z " + std::to_string (z) + " m");
       Scene scene;

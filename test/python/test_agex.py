@@ -30,7 +30,10 @@ def run_app(app, *args):
     exe = os.path.join(BIN_DIR, app)
     if not os.path.exists(exe):
         pytest.skip(f"{exe} is not built")
-    return subprocess.run([exe, *args], capture_output=True, text=True)
+    # The sanitizer runtimes preloaded for the interpreter (python/CMakeLists.txt) are not the
+    # apps' to load: an app built by clang carries its own, and refuses a second.
+    env = {k: v for k, v in os.environ.items() if k != "LD_PRELOAD"}
+    return subprocess.run([exe, *args], capture_output=True, text=True, env=env)
 
 
 def app_document(app, *args, tmp_path):

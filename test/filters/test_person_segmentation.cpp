@@ -440,6 +440,33 @@ TEST (PersonSegmentation, PersonCutInTwoByARailingInFrontIsOnePerson)
   EXPECT_EQ (railing, 0);
 }
 
+TEST (PersonSegmentation, PersonWhoseHipsAreHiddenIsOnePerson)
+{
+  // A board 1 m in front hides the person from 0.75 to 1.25 m: above it the upper body
+  // floats (its lowest point above 1.1 m), below it the legs are too low to be anyone; each
+  // is nobody alone, together they are the person.
+  Scene scene;
+  scene.addPerson (0.0, 3.0);
+  scene.addBox (-0.6, 0.6, 0.75, 1.25, 2.0, 2.05);
+  const DepthCamera cam;
+  const Cloud::Ptr cloud = scene.render (cam);
+  const Found found = segment (cloud);
+  ASSERT_EQ (found.persons.size (), 1u);
+  EXPECT_GE (found.infos[0].pieces, 2);
+  double recall, precision;
+  overlap (found.persons[0], personMask (0.0, 3.0, cam), recall, precision);
+  EXPECT_GT (precision, 0.99);  // not the board
+  int legs = 0, body = 0;
+  for (const auto i : found.persons[0].indices)
+  {
+    const double height = 1.0 - (*cloud)[i].y;
+    legs += height < 0.7;
+    body += height > 1.3;
+  }
+  EXPECT_GT (legs, 1000);
+  EXPECT_GT (body, 2000);
+}
+
 TEST (PersonSegmentation, WallDeskChairAndCabinetAreNoPerson)
 {
   Scene scene;

@@ -102,7 +102,10 @@ enum class PersonVerdict;
   *    and the head crosses the torso) and both sides are person-like on their own.
   * 6. **Merge.** Two person-like pieces of different clusters whose ground positions are
   *    within the merge distance join when together they are person-like (a person cut in
-  *    two by something in front). A piece that is not person-like, at most half as large
+  *    two by something in front); so do two pieces that are nobody alone (too small, too
+  *    low or floating) and lie one above the other as seen from the camera (the upper body
+  *    above something in front, the legs below it; with a floor only). A piece that is not
+  *    person-like, at most half as large
   *    as the person and not wider than half the maximum width (an arm or hand separated by
   *    a depth gap, a leg seen below a chair) joins the nearest person, within the merge
   *    reach on the floor, that it touches in the image or lies in front of or behind
@@ -326,6 +329,8 @@ private:
                      const detail::PersonPartStats &s, detail::PersonPart &left, detail::PersonPart &right) const;
   std::vector<detail::PersonCut> headCuts (const detail::PersonScan &scan, const detail::PersonPartStats &s) const;
   void mergePersonLike (const detail::PersonScan &scan, std::vector<detail::PersonCandidate> &people) const;
+  void mergeHiddenPieces (const detail::PersonScan &scan, std::vector<detail::PersonCandidate> &people,
+                          std::vector<detail::PersonCandidate> &leftovers) const;
   void mergePieces (detail::PersonScan &scan, std::vector<detail::PersonCandidate> &people,
                     std::vector<detail::PersonCandidate> &leftovers) const;
   int nearestPerson (const std::vector<detail::PersonPartStats> &own, const detail::PersonPartStats &piece,

@@ -411,6 +411,7 @@ agex::PersonSegmentation<PointT>::segment (pcl::PointCloud<pcl::Label> &labels, 
   std::vector<detail::PersonCandidate> people, leftovers;
   findCandidates (scan, people, leftovers);
   mergePersonLike (scan, people);
+  mergeHiddenPieces (scan, people, leftovers);
   mergePieces (scan, people, leftovers);
   std::vector<detail::PersonPixels> pixels;
   takePixels (scan, people, labels, pixels);
@@ -1022,6 +1023,68 @@ agex::PersonSegmentation<PointT>::mergePersonLike (const detail::PersonScan &sca
         merged = true;
       }
   }
+}
+
+/** 6. Merge, second: pieces that are nobody on their own, of different clusters, close
+  * together on the floor and one above the other as seen from the camera, are a person when
+  * together they pass the rules: one person cut apart by something in front (the upper body
+  * floating above a board's edge, the legs below it too low), which mergePersonLike does not
+  * join because neither piece is a person. Largest piece first; each joins one person at most. */
+template <typename PointT> void
+agex::PersonSegmentation<PointT>::mergeHiddenPieces (const detail::PersonScan &scan,
+                                                     std::vector<detail::PersonCandidate> &people,
+                                                     std::vector<detail::PersonCandidate> &leftovers) const
+{
+  using detail::PersonVerdict;
+  if (!scan.with_floor)
+    return;  // the floor-free rule has no heights to tell a cut-off piece by
+  auto mergeable = [&] (const detail::PersonCandidate &c) {
+    return c.stats.cells > 0 && c.stats.area >= 0.25f * min_area_ &&
+           (c.verdict == PersonVerdict::kTooSmall || c.verdict == PersonVerdict::kTooLow ||
+            c.verdict == PersonVerdict::kFloating);
+  };
+  std::sort (leftovers.begin (), leftovers.end (), [] (const detail::PersonCandidate &a,
+                                                       const detail::PersonCandidate &b) {
+    return a.stats.area > b.stats.area;
+  });
+  std::vector<unsigned char> used (leftovers.size (), 0);
+  for (std::size_t i = 0; i < leftovers.size (); ++i)
+  {
+    if (used[i] || !mergeable (leftovers[i]))
+      continue;
+    for (std::size_t j = i + 1; j < leftovers.size (); ++j)
+    {
+      const detail::PersonPartStats &p = leftovers[i].stats, &q = leftovers[j].stats;
+      if (used[j] || !mergeable (leftovers[j]) || detail::groundDistance (p, q) >= merge_distance_)
+        continue;
+      const float overlap = std::min (p.az_max, q.az_max) - std::max (p.az_min, q.az_min);
+      if (overlap < 0.5f * std::min (p.az_max - p.az_min, q.az_max - q.az_min))
+        continue;
+      bool same_cluster = false;
+      for (const auto &a : leftovers[i].parts)
+        for (const auto &b : leftovers[j].parts)
+          same_cluster = same_cluster || a.cluster == b.cluster;
+      if (same_cluster)
+        continue;
+      detail::PersonCandidate both;
+      both.parts = leftovers[i].parts;
+      both.parts.insert (both.parts.end (), leftovers[j].parts.begin (), leftovers[j].parts.end ());
+      measure (scan, both.parts, both.stats);
+      if (verdict (scan, both.parts, both.stats) != PersonVerdict::kPerson)
+        continue;
+      both.verdict = PersonVerdict::kPerson;
+      both.split = leftovers[i].split || leftovers[j].split;
+      both.pieces = leftovers[i].pieces + leftovers[j].pieces;
+      people.push_back (std::move (both));
+      used[i] = used[j] = 1;
+      break;
+    }
+  }
+  std::size_t kept = 0;
+  for (std::size_t i = 0; i < leftovers.size (); ++i)
+    if (!used[i] && kept++ != i)  // never moved onto itself, which would empty it
+      leftovers[kept - 1] = std::move (leftovers[i]);
+  leftovers.resize (kept);
 }
 
 /** 6. Merge, then: small pieces, largest first, join the nearest person they touch in the

@@ -329,6 +329,8 @@ private:
                      const detail::PersonPartStats &s, detail::PersonPart &left, detail::PersonPart &right) const;
   std::vector<detail::PersonCut> headCuts (const detail::PersonScan &scan, const detail::PersonPartStats &s) const;
   void mergePersonLike (const detail::PersonScan &scan, std::vector<detail::PersonCandidate> &people) const;
+  bool joinedPerson (const detail::PersonScan &scan, const detail::PersonCandidate &a,
+                     const detail::PersonCandidate &b, detail::PersonCandidate &both) const;
   void mergeHiddenPieces (const detail::PersonScan &scan, std::vector<detail::PersonCandidate> &people,
                           std::vector<detail::PersonCandidate> &leftovers) const;
   void mergePieces (detail::PersonScan &scan, std::vector<detail::PersonCandidate> &people,

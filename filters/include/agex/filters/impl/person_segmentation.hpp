@@ -988,6 +988,27 @@ agex::PersonSegmentation<PointT>::headCuts (const detail::PersonScan &scan, cons
   return cuts;
 }
 
+/** a and b together, when they are of different clusters (a cut is never undone: parts of
+  * one cluster were found to be two people) and together a person. */
+template <typename PointT> bool
+agex::PersonSegmentation<PointT>::joinedPerson (const detail::PersonScan &scan, const detail::PersonCandidate &a,
+                                                const detail::PersonCandidate &b, detail::PersonCandidate &both) const
+{
+  for (const auto &pa : a.parts)
+    for (const auto &pb : b.parts)
+      if (pa.cluster == pb.cluster)
+        return false;
+  both.parts = a.parts;
+  both.parts.insert (both.parts.end (), b.parts.begin (), b.parts.end ());
+  measure (scan, both.parts, both.stats);
+  if (verdict (scan, both.parts, both.stats) != detail::PersonVerdict::kPerson)
+    return false;
+  both.verdict = detail::PersonVerdict::kPerson;
+  both.split = a.split || b.split;
+  both.pieces = a.pieces + b.pieces;
+  return true;
+}
+
 /** 6. Merge, first: two person-like pieces close together on the floor (one person cut in
   * two by something in front) are one when together they are a person. */
 template <typename PointT> void
@@ -1002,22 +1023,9 @@ agex::PersonSegmentation<PointT>::mergePersonLike (const detail::PersonScan &sca
       {
         if (detail::groundDistance (people[i].stats, people[j].stats) >= merge_distance_)
           continue;
-        // Never undo a cut: parts of one cluster were found to be two people.
-        bool same_cluster = false;
-        for (const auto &a : people[i].parts)
-          for (const auto &b : people[j].parts)
-            same_cluster = same_cluster || a.cluster == b.cluster;
-        if (same_cluster)
-          continue;
         detail::PersonCandidate both;
-        both.parts = people[i].parts;
-        both.parts.insert (both.parts.end (), people[j].parts.begin (), people[j].parts.end ());
-        measure (scan, both.parts, both.stats);
-        if (verdict (scan, both.parts, both.stats) != detail::PersonVerdict::kPerson)
+        if (!joinedPerson (scan, people[i], people[j], both))
           continue;
-        both.verdict = detail::PersonVerdict::kPerson;
-        both.split = people[i].split || people[j].split;
-        both.pieces = people[i].pieces + people[j].pieces;
         people[i] = std::move (both);
         people.erase (people.begin () + j);
         merged = true;
@@ -1060,21 +1068,9 @@ agex::PersonSegmentation<PointT>::mergeHiddenPieces (const detail::PersonScan &s
       const float overlap = std::min (p.az_max, q.az_max) - std::max (p.az_min, q.az_min);
       if (overlap < 0.5f * std::min (p.az_max - p.az_min, q.az_max - q.az_min))
         continue;
-      bool same_cluster = false;
-      for (const auto &a : leftovers[i].parts)
-        for (const auto &b : leftovers[j].parts)
-          same_cluster = same_cluster || a.cluster == b.cluster;
-      if (same_cluster)
-        continue;
       detail::PersonCandidate both;
-      both.parts = leftovers[i].parts;
-      both.parts.insert (both.parts.end (), leftovers[j].parts.begin (), leftovers[j].parts.end ());
-      measure (scan, both.parts, both.stats);
-      if (verdict (scan, both.parts, both.stats) != PersonVerdict::kPerson)
+      if (!joinedPerson (scan, leftovers[i], leftovers[j], both))
         continue;
-      both.verdict = PersonVerdict::kPerson;
-      both.split = leftovers[i].split || leftovers[j].split;
-      both.pieces = leftovers[i].pieces + leftovers[j].pieces;
       people.push_back (std::move (both));
       used[i] = used[j] = 1;
       break;

@@ -280,6 +280,22 @@ personMask (double x, double z, const DepthCamera &cam, Pose pose = Pose::ArmsDo
   return mask;
 }
 
+/** A person's points lower (higher) than the given height above the floor (the scenes'
+  * camera is 1 m above it). */
+long
+pointsBelow (const Cloud &cloud, const pcl::PointIndices &person, double height)
+{
+  return std::count_if (person.indices.begin (), person.indices.end (),
+                        [&] (int i) { return 1.0 - cloud[i].y < height; });
+}
+
+long
+pointsAbove (const Cloud &cloud, const pcl::PointIndices &person, double height)
+{
+  return std::count_if (person.indices.begin (), person.indices.end (),
+                        [&] (int i) { return 1.0 - cloud[i].y > height; });
+}
+
 /** Fraction of mask covered by the person, and of the person inside the mask. */
 void
 overlap (const pcl::PointIndices &person, const std::vector<unsigned char> &mask, double &recall, double &precision)
@@ -426,18 +442,10 @@ TEST (PersonSegmentation, PersonCutInTwoByARailingInFrontIsOnePerson)
   ASSERT_EQ (found.persons.size (), 1u);
   EXPECT_GE (found.infos[0].pieces, 2);
   // Legs and upper body both belong to it; the railing does not.
-  int legs = 0, body = 0, railing = 0;
-  for (const auto i : found.persons[0].indices)
-  {
-    const auto &p = (*cloud)[i];
-    const double height = 1.0 - p.y;
-    railing += p.z < 2.6;
-    legs += height < 0.6;
-    body += height > 1.0;
-  }
-  EXPECT_GT (legs, 2000);
-  EXPECT_GT (body, 8000);
-  EXPECT_EQ (railing, 0);
+  EXPECT_GT (pointsBelow (*cloud, found.persons[0], 0.6), 2000);
+  EXPECT_GT (pointsAbove (*cloud, found.persons[0], 1.0), 8000);
+  const auto &ids = found.persons[0].indices;
+  EXPECT_EQ (std::count_if (ids.begin (), ids.end (), [&] (int i) { return (*cloud)[i].z < 2.6; }), 0);
 }
 
 TEST (PersonSegmentation, PersonWhoseHipsAreHiddenIsOnePerson)
@@ -456,15 +464,8 @@ TEST (PersonSegmentation, PersonWhoseHipsAreHiddenIsOnePerson)
   double recall, precision;
   overlap (found.persons[0], personMask (0.0, 3.0, cam), recall, precision);
   EXPECT_GT (precision, 0.99);  // not the board
-  int legs = 0, body = 0;
-  for (const auto i : found.persons[0].indices)
-  {
-    const double height = 1.0 - (*cloud)[i].y;
-    legs += height < 0.7;
-    body += height > 1.3;
-  }
-  EXPECT_GT (legs, 1000);
-  EXPECT_GT (body, 2000);
+  EXPECT_GT (pointsBelow (*cloud, found.persons[0], 0.7), 1000);  // legs
+  EXPECT_GT (pointsAbove (*cloud, found.persons[0], 1.3), 2000);  // upper body
 }
 
 TEST (PersonSegmentation, WallDeskChairAndCabinetAreNoPerson)

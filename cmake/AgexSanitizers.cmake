@@ -2,8 +2,8 @@
 # (LeakSanitizer included) and UndefinedBehaviorSanitizer. Undefined behaviour aborts
 # (-fno-sanitize-recover) so that a test hitting it fails instead of printing a warning.
 # Runtime options and suppressions: test/sanitizers/, compiled into every executable
-# (agex_use_sanitizer_defaults below).
-if(AGEX_SANITIZE)
+# (agex_use_sanitizer_defaults below). AGEX_BUILD_FUZZERS (below) implies the same.
+if(AGEX_SANITIZE OR AGEX_BUILD_FUZZERS)
   # EIGEN_MALLOC_ALREADY_ALIGNED=1: Eigen switches to its own aligned allocator when it sees
   # AddressSanitizer (__SANITIZE_ADDRESS__), which then frees memory that the system PCL (built
   # without it) allocated with plain malloc: a false heap-buffer-overflow in every cloud passed
@@ -32,11 +32,6 @@ if(AGEX_BUILD_FUZZERS)
   endif()
   if(NOT AGEX_BUILD_TESTS)
     message(FATAL_ERROR "AGEX_BUILD_FUZZERS needs AGEX_BUILD_TESTS=ON (the fuzzers live in test/fuzz)")
-  endif()
-  if(NOT AGEX_SANITIZE)
-    add_compile_options(-fsanitize=address,undefined -fno-sanitize-recover=undefined
-                        -fno-omit-frame-pointer -DEIGEN_MALLOC_ALREADY_ALIGNED=1)  # see above
-    add_link_options(-fsanitize=address,undefined)
   endif()
   add_compile_options(-gline-tables-only)
 endif()

@@ -316,3 +316,51 @@ TEST (DepthMedianFilter, MisuseReportsAnErrorAndGivesAnEmptyCloud)
   }
 }
 }  // namespace
+
+namespace
+{
+TEST (DepthMedianFilter, FilterInPlaceIsFilterWithoutTheCopy)
+{
+  // One filter object for several frames and index sets, as a pipeline holds it: each
+  // in-place run gives filter ()'s cloud, whatever the runs before it read.
+  Median median;
+  median.setWindowSize (3);
+  median.setMaxAllowedMovement (0.05f);
+  for (unsigned seed = 20; seed < 26; ++seed)
+  {
+    const int width = 17 + static_cast<int> (seed % 3) * 11, height = 13 + static_cast<int> (seed % 2) * 9;
+    const Cloud::Ptr input = randomFrame (width, height, seed);
+    pcl::IndicesPtr some (new pcl::Indices);
+    for (int i = static_cast<int> (seed) % 4; i < static_cast<int> (input->size ()); i += 1 + static_cast<int> (seed) % 3)
+      some->push_back (i);
+    Median fresh;
+    fresh.setInputCloud (input);
+    fresh.setIndices (some);
+    fresh.setWindowSize (3);
+    fresh.setMaxAllowedMovement (0.05f);
+    Cloud expected;
+    fresh.filter (expected);
+
+    Cloud::Ptr cloud (new Cloud (*input));
+    median.setInputCloud (cloud);
+    median.setIndices (some);
+    ASSERT_TRUE (median.filterInPlace (*cloud));
+    expectBitwiseEqual (expected, *cloud, "seed " + std::to_string (seed));
+  }
+}
+
+TEST (DepthMedianFilter, FilterInPlaceRefusesAnotherCloud)
+{
+  QuietPcl quiet;
+  const Cloud::Ptr input = randomFrame (9, 7, 30);
+  Cloud other (*input);
+  Median median;
+  median.setInputCloud (input);
+  median.setWindowSize (3);
+  EXPECT_FALSE (median.filterInPlace (other));
+  expectBitwiseEqual (*input, other, "the other cloud");
+  Cloud::Ptr row (new Cloud (10, 1, pcl::PointXYZ (0.f, 0.f, 2.f)));
+  median.setInputCloud (row);
+  EXPECT_FALSE (median.filterInPlace (*row));  // unorganized
+}
+}  // namespace

@@ -14,7 +14,9 @@
 #include <pcl/segmentation/organized_connected_component_segmentation.h>
 
 #include <algorithm>
+#include <random>
 #include <iterator>
+#include <numeric>
 #include <set>
 #include <tuple>
 
@@ -880,5 +882,145 @@ TEST (DepthGrowingConnectivity, AQuantisedFarSurfaceIsOneMeshAndKeepsItsPoints)
   EXPECT_TRUE (agex::connectedNeighbours (pcl::PointXYZ (0.f, 0.f, 2.f), pcl::PointXYZ (0.f, 0.f, 2.029f), 0.03f, 0.0043f));
   EXPECT_FALSE (agex::connectedNeighbours (pcl::PointXYZ (0.f, 0.f, 2.f), pcl::PointXYZ (0.f, 0.f, 2.031f), 0.03f, 0.0043f));
   EXPECT_TRUE (agex::connectedNeighbours (pcl::PointXYZ (0.f, 0.f, 5.f), pcl::PointXYZ (0.f, 0.f, 5.1f), 0.03f, 0.0043f));
+}
+}  // namespace
+
+// ---------------------------------------------------------------------------
+// One filter object for a stream of frames (as agex::DepthPipeline holds them): their
+// frame-sized scratch is kept between runs and only partly refilled, so a run must give
+// what a new object gives, whatever frames of whatever size came before.
+
+namespace
+{
+/** Rectangles at random depths over a NaN background, ragged strands, interpolated
+  * silhouette pixels and holes: everything the three filters act on. */
+Cloud::Ptr
+clutteredFrame (int width, int height, unsigned seed)
+{
+  std::mt19937 rng (seed);
+  std::uniform_int_distribution<int> pick (0, 1 << 20);
+  std::uniform_real_distribution<float> unit (0.f, 1.f);
+  Cloud::Ptr cloud = gridCloud (width, height);
+  for (int r = 0; r < 6; ++r)
+  {
+    const int w = 3 + pick (rng) % (width / 2), h = 3 + pick (rng) % (height / 2);
+    const int u0 = pick (rng) % (width - 2), v0 = pick (rng) % (height - 2);
+    fillRect (*cloud, u0, v0, std::min (w, width - u0), std::min (h, height - v0), 1.5f + 2.f * unit (rng));
+  }
+  for (int s = 0; s < 8; ++s)  // one-pixel strands
+    fillRect (*cloud, pick (rng) % width, pick (rng) % (height - 5), 1, 5, 2.f);
+  for (std::size_t i = 1; i + 1 < cloud->size (); ++i)
+  {
+    pcl::PointXYZ &p = (*cloud)[i];
+    const pcl::PointXYZ &left = (*cloud)[i - 1], &right = (*cloud)[i + 1];
+    if (unit (rng) < 0.3f && std::isfinite (left.z) && std::isfinite (right.z) && std::abs (left.z - right.z) > 0.2f)
+      p = pcl::PointXYZ (p.x, p.y, 0.5f * (left.z + right.z));  // a veil pixel on a silhouette
+    else if (unit (rng) < 0.05f)
+      p.x = p.y = p.z = nanf_ ();
+  }
+  return cloud;
+}
+
+/** Every other finite point, in a scrambled order when asked. */
+pcl::IndicesPtr
+someIndices (const Cloud &cloud, unsigned seed, bool scrambled)
+{
+  pcl::IndicesPtr some (new pcl::Indices);
+  for (int i = static_cast<int> (seed % 2); i < static_cast<int> (cloud.size ()); i += 2)
+    some->push_back (i);
+  if (scrambled)
+    std::shuffle (some->begin (), some->end (), std::mt19937 (seed));
+  return some;
+}
+
+pcl::IndicesPtr
+allIndices (const Cloud &cloud)
+{
+  pcl::IndicesPtr all (new pcl::Indices (cloud.size ()));
+  std::iota (all->begin (), all->end (), 0);
+  return all;
+}
+
+TEST (ReusedFilters, GiveWhatNewOnesGiveFrameAfterFrame)
+{
+  Mixed mixed;
+  Spur spurs;
+  Segmentation segmentation;
+  int mixed_found = 0, spurs_found = 0, meshes_found = 0;
+  for (unsigned seed = 1; seed <= 12; ++seed)
+  {
+    const int width = seed % 3 == 0 ? 64 : 40, height = seed % 4 == 0 ? 48 : 30;
+    const Cloud::Ptr cloud = clutteredFrame (width, height, seed);
+    const bool limited = seed % 2 == 1;
+    // PCL objects keep their indices: an unlimited frame is given all of them.
+    const pcl::IndicesPtr some = limited ? someIndices (*cloud, seed, seed % 5 == 0) : allIndices (*cloud);
+    const std::string frame = "frame " + std::to_string (seed);
+
+    auto run_mixed = [&] (Mixed &filter) {
+      filter.setInputCloud (cloud);
+      filter.setIndices (some);
+      filter.setNegative (true);
+      pcl::Indices out;
+      filter.filter (out);
+      return out;
+    };
+    Mixed fresh_mixed;
+    const pcl::Indices mixed_expected = run_mixed (fresh_mixed);
+    EXPECT_EQ (run_mixed (mixed), mixed_expected) << frame;
+    mixed_found += static_cast<int> (mixed_expected.size ());
+
+    auto run_spurs = [&] (Spur &filter) {
+      filter.setInputCloud (cloud);
+      filter.setIndices (some);
+      filter.setIterations (3);
+      pcl::Indices out;
+      filter.filter (out);
+      return out;
+    };
+    Spur fresh_spurs;
+    const pcl::Indices spurs_expected = run_spurs (fresh_spurs);
+    EXPECT_EQ (run_spurs (spurs), spurs_expected) << frame;
+    spurs_found += static_cast<int> (spurs_expected.size ());
+
+    auto run_segmentation = [&] (Segmentation &segmenter) {
+      segmenter.setInputCloud (cloud);
+      segmenter.setIndices (some);
+      std::vector<pcl::PointIndices> meshes;
+      segmenter.segment (meshes);
+      std::vector<std::vector<int>> out;
+      for (const auto &m : meshes)
+        out.push_back (m.indices);
+      return out;
+    };
+    Segmentation fresh_segmentation;
+    const auto meshes_expected = run_segmentation (fresh_segmentation);
+    EXPECT_EQ (run_segmentation (segmentation), meshes_expected) << frame;
+    meshes_found += static_cast<int> (meshes_expected.size ());
+    for (const auto &mesh : meshes_expected)
+      EXPECT_TRUE (std::is_sorted (mesh.begin (), mesh.end ())) << frame;
+  }
+  // The frames did give each filter something to do.
+  EXPECT_GT (mixed_found, 20);
+  EXPECT_GT (spurs_found, 100);
+  EXPECT_GT (meshes_found, 24);
+}
+
+TEST (SurfaceSegmentation, ScrambledIndicesGiveTheSameMeshes)
+{
+  const Cloud::Ptr cloud = clutteredFrame (40, 30, 99);
+  const pcl::IndicesPtr in_order = someIndices (*cloud, 99, false), scrambled = someIndices (*cloud, 99, true);
+  ASSERT_NE (*in_order, *scrambled);
+  Segmentation a, b;
+  a.setInputCloud (cloud);
+  a.setIndices (in_order);
+  b.setInputCloud (cloud);
+  b.setIndices (scrambled);
+  std::vector<pcl::PointIndices> meshes_a, meshes_b;
+  a.segment (meshes_a);
+  b.segment (meshes_b);
+  ASSERT_GT (meshes_a.size (), 2u);
+  ASSERT_EQ (meshes_a.size (), meshes_b.size ());
+  for (std::size_t m = 0; m < meshes_a.size (); ++m)
+    EXPECT_EQ (meshes_a[m].indices, meshes_b[m].indices) << m;
 }
 }  // namespace

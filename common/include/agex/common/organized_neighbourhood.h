@@ -4,6 +4,7 @@
 // one place so that a mesh found by one is exactly a connected graph for the other.
 
 #include <pcl/point_cloud.h>
+#include <pcl/types.h>
 #include <algorithm>
 #include <cmath>
 
@@ -78,5 +79,33 @@ forEachOrganizedEdge (const pcl::PointCloud<PointT> &cloud, const unsigned char 
           edge (i, j, std::sqrt (sq));
       }
     }
+}
+
+/** A rectangle of pixels, inclusive; empty when u_min > u_max. */
+struct PixelBox
+{
+  int u_min = 0, u_max = -1, v_min = 0, v_max = -1;
+  bool empty () const { return u_min > u_max || v_min > v_max; }
+};
+
+/** The smallest rectangle holding every pixel of indices, grown by margin pixels on each
+  * side and clipped to the width x height image: what a filter with a window of that radius
+  * reads around the points it filters. */
+inline PixelBox
+boundingPixelBox (const pcl::Indices &indices, int width, int height, int margin)
+{
+  PixelBox box;
+  if (indices.empty () || width <= 0 || height <= 0)
+    return box;
+  box.u_min = width, box.v_min = height;
+  for (const auto index : indices)
+  {
+    const int u = index % width, v = index / width;
+    box.u_min = std::min (box.u_min, u), box.u_max = std::max (box.u_max, u);
+    box.v_min = std::min (box.v_min, v), box.v_max = std::max (box.v_max, v);
+  }
+  box.u_min = std::max (0, box.u_min - margin), box.u_max = std::min (width - 1, box.u_max + margin);
+  box.v_min = std::max (0, box.v_min - margin), box.v_max = std::min (height - 1, box.v_max + margin);
+  return box;
 }
 }  // namespace agex

@@ -70,18 +70,31 @@ public:
   void setKeepOnViewingRay (bool keep) { keep_on_viewing_ray_ = keep; }
   bool getKeepOnViewingRay () const { return keep_on_viewing_ray_; }
 
+  /** \brief Filters the points of setIndices in the input cloud itself, leaving every other
+    * point as it is: filter ()'s result without its copy of the whole cloud, for a pipeline
+    * that filters a person's pixels of a large frame. Every median is taken from the depths
+    * before the call. cloud must be the cloud given to setInputCloud (PCL_ERROR otherwise).
+    * \return false (cloud unchanged) on a misuse filter () would report */
+  bool filterInPlace (PointCloud &cloud);
+
 protected:
   void applyFilter (PointCloud &output) override;
 
 private:
+  /** Checks the settings and fills depth_ around the points to filter. */
+  bool prepare ();
+
   /** Filters every point of indices_ with scratch (room for a whole window) as the
     * window buffer. */
   void filterPoints (PointCloud &output, float *scratch) const;
 
+  /** filterPoints with a scratch buffer for the window size. */
+  void filterPoints (PointCloud &output);
+
   int window_size_ = 5;
   float max_allowed_movement_ = std::numeric_limits<float>::max ();
   bool keep_on_viewing_ray_ = true;
-  std::vector<float> depth_;    // per run: z of each point, NaN where the point is not finite
+  std::vector<float> depth_;    // z of each point, NaN where not finite; current around the points filtered
   std::vector<float> scratch_;  // window buffer for windows larger than kStackWindow
   static constexpr int kStackWindow = 3;
 };

@@ -90,7 +90,7 @@ private:
   float min_jump_growth_ = 0.f;
   float max_veil_angle_deg_ = 15.f;
   float interior_margin_ = 0.1f;
-  std::vector<float> ranges_;  // per run: distance of each point from the sensor
+  std::vector<float> ranges_;  // distance of each point from the sensor, current around the tested points
 };
 }  // namespace agex
 

@@ -2,6 +2,8 @@
 
 #include <pcl/filters/filter_indices.h>
 
+#include <vector>
+
 namespace agex
 {
 /** \brief Removes thin spurs and ragged edges from an organized cloud: a morphological
@@ -63,6 +65,9 @@ private:
   int iterations_ = 3;
   float delta_connected_ = 0.05f;
   float delta_connected_growth_ = 0.f;
+  // Per point of the frame, all zero between runs (a run clears what it set): a person's
+  // pixels of a large frame then cost what they number, not what the frame does.
+  std::vector<unsigned char> kept_, edges_, count_;
 };
 }  // namespace agex
 

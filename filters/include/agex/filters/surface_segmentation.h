@@ -59,10 +59,18 @@ protected:
   std::string getClassName () const { return "SurfaceSegmentation"; }
 
 private:
+  /** segment () with labels only where asked (nullptr: none). */
+  void segmentInto (pcl::PointCloud<pcl::Label> *labels, std::vector<pcl::PointIndices> &meshes);
+
   float delta_connected_ = 0.05f;
   float delta_connected_growth_ = 0.f;
   std::size_t min_mesh_size_ = 1;
   std::size_t max_mesh_size_ = std::numeric_limits<std::size_t>::max ();
+  // Per point of the frame, between runs 0 and -1 (a run resets what it set): a person's
+  // pixels of a large frame then cost what they number, not what the frame does.
+  std::vector<unsigned char> selected_;
+  std::vector<int> component_;
+  std::vector<int> seeds_;
 };
 }  // namespace agex
 

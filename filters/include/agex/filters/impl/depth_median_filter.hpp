@@ -1,5 +1,6 @@
 #pragma once
 
+#include <agex/common/organized_neighbourhood.h>
 #include <agex/filters/depth_median_filter.h>
 
 #include <pcl/common/point_tests.h>
@@ -121,34 +122,40 @@ agex::DepthMedianFilter<PointT>::filterPoints (PointCloud &output, float *window
   }
 }
 
-template <typename PointT> void
-agex::DepthMedianFilter<PointT>::applyFilter (PointCloud &output)
+template <typename PointT> bool
+agex::DepthMedianFilter<PointT>::prepare ()
 {
   if (!input_->isOrganized ())
   {
     PCL_ERROR ("[agex::%s::applyFilter] The input cloud is not organized (height %u); a median over "
                "neighbouring pixels needs the pixel grid.\n", getClassName ().c_str (), input_->height);
-    output.clear ();
-    return;
+    return false;
   }
   if (window_size_ < 1 || !(max_allowed_movement_ >= 0.f))
   {
     PCL_ERROR ("[agex::%s::applyFilter] Invalid parameters: window size %d (>= 1), max allowed movement %g "
                "(>= 0).\n", getClassName ().c_str (), window_size_, max_allowed_movement_);
-    output.clear ();
-    return;
+    return false;
   }
-
-  output = *input_;
   // One contiguous depth array, NaN marking the points PCL skips (pcl::isFinite):
-  // the window loop then reads 4 bytes per neighbour instead of a whole point.
+  // the window loop then reads 4 bytes per neighbour instead of a whole point. Only the
+  // windows around the filtered points are read, so only they are filled.
+  const int width = static_cast<int> (input_->width);
+  const PixelBox box = boundingPixelBox (*indices_, width, static_cast<int> (input_->height), window_size_ / 2);
   depth_.resize (input_->size ());
-  for (std::size_t i = 0; i < input_->size (); ++i)
-  {
-    const PointT &p = (*input_)[i];
-    depth_[i] = pcl::isFinite (p) ? p.z : std::numeric_limits<float>::quiet_NaN ();
-  }
+  for (int v = box.v_min; v <= box.v_max; ++v)
+    for (int u = box.u_min; u <= box.u_max; ++u)
+    {
+      const std::size_t i = static_cast<std::size_t> (v) * width + u;
+      const PointT &p = (*input_)[i];
+      depth_[i] = pcl::isFinite (p) ? p.z : std::numeric_limits<float>::quiet_NaN ();
+    }
+  return true;
+}
 
+template <typename PointT> void
+agex::DepthMedianFilter<PointT>::filterPoints (PointCloud &output)
+{
   const int side = 2 * (window_size_ / 2) + 1;
   if (side <= kStackWindow)
   {
@@ -160,6 +167,36 @@ agex::DepthMedianFilter<PointT>::applyFilter (PointCloud &output)
     scratch_.resize (static_cast<std::size_t> (side) * side);
     filterPoints (output, scratch_.data ());
   }
+}
+
+template <typename PointT> void
+agex::DepthMedianFilter<PointT>::applyFilter (PointCloud &output)
+{
+  if (!prepare ())
+  {
+    output.clear ();
+    return;
+  }
+  output = *input_;
+  filterPoints (output);
+}
+
+template <typename PointT> bool
+agex::DepthMedianFilter<PointT>::filterInPlace (PointCloud &cloud)
+{
+  if (!input_ || input_.get () != &cloud)
+  {
+    PCL_ERROR ("[agex::%s::filterInPlace] The cloud to filter in place must be the input cloud.\n",
+               getClassName ().c_str ());
+    return false;
+  }
+  if (!this->initCompute ())
+    return false;
+  const bool ok = prepare ();
+  if (ok)
+    filterPoints (cloud);
+  this->deinitCompute ();
+  return ok;
 }
 
 #define PCL_INSTANTIATE_DepthMedianFilter(T) template class PCL_EXPORTS agex::DepthMedianFilter<T>;

@@ -15,38 +15,59 @@ agex::MixedPixelFilter<PointT>::isMixed (int index, const float *ranges, float c
   if (!isFinitePoint (p))
     return false;
   const int width = static_cast<int> (cloud.width), height = static_cast<int> (cloud.height);
-  const int u = index % width, v = index / width;
+  const int v = index / width, u = index - v * width;
   auto range = [&] (int i) { return ranges ? ranges[i] : cloud[i].getVector3fMap ().norm (); };
   const float range_p = range (index);
   if (!(range_p > 0.f))
     return false;
-  const Eigen::Vector3f ray = p.getVector3fMap () / range_p;
   const float min_jump = std::max (min_jump_, min_jump_growth_ * range_p * range_p);
 
+  // Whether the point lies inside a jump between i1 and i2 (ranges r1, r2) and on the line
+  // between them as seen from the sensor: a veil pixel.
+  auto veiled = [&] (int i1, int i2, float r1, float r2) {
+    const float jump = std::abs (r2 - r1);
+    if (!(jump >= min_jump))
+      return false;
+    const float lo = std::min (r1, r2), hi = std::max (r1, r2);
+    const float margin = interior_margin_ * jump;
+    if (range_p <= lo + margin || range_p >= hi - margin)
+      return false;
+    // Rarely reached (a jump across the point): the viewing ray only now.
+    const Eigen::Vector3f ray = p.getVector3fMap () / range_p;
+    const Eigen::Vector3f across = cloud[i2].getVector3fMap () - cloud[i1].getVector3fMap ();
+    const float len = across.norm ();
+    return len > 0.f && std::abs (across.dot (ray)) >= cos_max_veil_angle * len;
+  };
+
+  const int radius = window_radius_;
+  if (ranges && u >= radius && u < width - radius && v >= radius && v < height - radius)
+  {
+    // Every pair inside the image: no bounds to check. NaN ranges fail the jump test.
+    for (const auto &d : kForwardNeighbours)
+    {
+      const int step = d[0] + d[1] * width;
+      for (int r = 1; r <= radius; ++r)
+      {
+        const int i1 = index - r * step, i2 = index + r * step;
+        if (std::abs (ranges[i2] - ranges[i1]) >= min_jump && veiled (i1, i2, ranges[i1], ranges[i2]))
+          return true;
+      }
+    }
+    return false;
+  }
+
   for (const auto &d : kForwardNeighbours)
-    for (int r = 1; r <= window_radius_; ++r)
+    for (int r = 1; r <= radius; ++r)
     {
       const int u1 = u - r * d[0], v1 = v - r * d[1];
       const int u2 = u + r * d[0], v2 = v + r * d[1];
       if (u1 < 0 || u1 >= width || v1 < 0 || v1 >= height || u2 < 0 || u2 >= width || v2 < 0 || v2 >= height)
         continue;
       const int i1 = v1 * width + u1, i2 = v2 * width + u2;
-      const PointT &q1 = cloud[i1];
-      const PointT &q2 = cloud[i2];
-      // Precomputed ranges are NaN for non-finite points: the jump test below skips them.
-      if (!ranges && (!isFinitePoint (q1) || !isFinitePoint (q2)))
+      // Precomputed ranges are NaN for non-finite points: the jump test skips them.
+      if (!ranges && (!isFinitePoint (cloud[i1]) || !isFinitePoint (cloud[i2])))
         continue;
-      const float r1 = range (i1), r2 = range (i2);
-      const float jump = std::abs (r2 - r1);
-      if (!(jump >= min_jump))
-        continue;
-      const float lo = std::min (r1, r2), hi = std::max (r1, r2);
-      const float margin = interior_margin_ * jump;
-      if (range_p <= lo + margin || range_p >= hi - margin)
-        continue;
-      const Eigen::Vector3f across = q2.getVector3fMap () - q1.getVector3fMap ();
-      const float len = across.norm ();
-      if (len > 0.f && std::abs (across.dot (ray)) >= cos_max_veil_angle * len)
+      if (veiled (i1, i2, range (i1), range (i2)))
         return true;
     }
   return false;
@@ -77,25 +98,16 @@ agex::MixedPixelFilter<PointT>::applyFilter (pcl::Indices &indices)
   // Each point's range is needed by up to 16 tests of its neighbours: compute it once,
   // NaN for a non-finite point (what isMixed relies on to skip it).
   // Only the window around the tested points is read: the ranges of a person's pixels and
-  // their neighbours, not of the whole frame.
+  // their neighbours, not of the whole frame (the rest of ranges_ may hold another frame's).
   const int width = static_cast<int> (input_->width);
-  int u_min = width, u_max = -1, v_min = static_cast<int> (input_->height), v_max = -1;
-  for (const auto index : *indices_)
-  {
-    const int u = index % width, v = index / width;
-    u_min = std::min (u_min, u), u_max = std::max (u_max, u);
-    v_min = std::min (v_min, v), v_max = std::max (v_max, v);
-  }
-  ranges_.assign (input_->size (), std::numeric_limits<float>::quiet_NaN ());
-  u_min = std::max (0, u_min - window_radius_), u_max = std::min (width - 1, u_max + window_radius_);
-  v_min = std::max (0, v_min - window_radius_), v_max = std::min (static_cast<int> (input_->height) - 1, v_max + window_radius_);
-  for (int v = v_min; v <= v_max; ++v)
-    for (int u = u_min; u <= u_max; ++u)
+  const PixelBox box = boundingPixelBox (*indices_, width, static_cast<int> (input_->height), window_radius_);
+  ranges_.resize (input_->size ());
+  for (int v = box.v_min; v <= box.v_max; ++v)
+    for (int u = box.u_min; u <= box.u_max; ++u)
     {
       const std::size_t i = static_cast<std::size_t> (v) * width + u;
       const PointT &p = (*input_)[i];
-      if (isFinitePoint (p))
-        ranges_[i] = p.getVector3fMap ().norm ();
+      ranges_[i] = isFinitePoint (p) ? p.getVector3fMap ().norm () : std::numeric_limits<float>::quiet_NaN ();
     }
 
   indices.reserve (indices_->size ());

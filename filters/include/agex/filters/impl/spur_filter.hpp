@@ -26,7 +26,13 @@ agex::SpurFilter<PointT>::applyFilter (pcl::Indices &indices)
   }
   const auto &cloud = *input_;
   const int width = static_cast<int> (cloud.width), height = static_cast<int> (cloud.height);
-  std::vector<unsigned char> kept (cloud.size (), 0);
+  if (kept_.size () != cloud.size ())
+  {
+    kept_.assign (cloud.size (), 0);
+    edges_.assign (cloud.size (), 0);
+    count_.assign (cloud.size (), 0);
+  }
+  std::vector<unsigned char> &kept = kept_, &edges = edges_, &count = count_;
   std::vector<int> alive;
   for (const auto i : *indices_)
     if (isFinitePoint (cloud[i]) && !kept[i])
@@ -39,21 +45,23 @@ agex::SpurFilter<PointT>::applyFilter (pcl::Indices &indices)
   // point's connected neighbours once (a bit per direction of kAllNeighbours) and keep a
   // count of the kept ones. A pass then only needs to look at the points whose count
   // dropped in the pass before, the neighbours of what it removed.
-  std::vector<unsigned char> edges (cloud.size (), 0);
-  std::vector<unsigned char> count (cloud.size (), 0);
+  // Each undirected edge is tested once, from its first point (kAllNeighbours[d + 4] is
+  // kAllNeighbours[d] reversed).
   for (const int i : alive)
   {
-    const int u = i % width, v = i / width;
-    for (int d = 0; d < 8; ++d)
+    const int v = i / width, u = i - v * width;
+    for (int d = 0; d < 4; ++d)
     {
       const int nu = u + kAllNeighbours[d][0], nv = v + kAllNeighbours[d][1];
-      if (nu < 0 || nu >= width || nv < 0 || nv >= height)
+      if (nu < 0 || nu >= width || nv >= height)
         continue;
       const int j = nv * width + nu;
       if (kept[j] && connectedNeighbours (cloud[i], cloud[j], delta_connected_, delta_connected_growth_))
       {
         edges[i] |= static_cast<unsigned char> (1u << d);
+        edges[j] |= static_cast<unsigned char> (1u << (d + 4));
         ++count[i];
+        ++count[j];
       }
     }
   }
@@ -96,6 +104,8 @@ agex::SpurFilter<PointT>::applyFilter (pcl::Indices &indices)
     else if (extract_removed_indices_)
       removed_indices_->push_back (i);
   }
+  for (const int i : alive)
+    kept[i] = edges[i] = count[i] = 0;
 }
 
 #define PCL_INSTANTIATE_SpurFilter(T) template class PCL_EXPORTS agex::SpurFilter<T>;

@@ -8,16 +8,23 @@
 template <typename PointT> void
 agex::SurfaceSegmentation<PointT>::segment (std::vector<pcl::PointIndices> &meshes)
 {
-  pcl::PointCloud<pcl::Label> labels;
-  segment (labels, meshes);
+  segmentInto (nullptr, meshes);
 }
 
 template <typename PointT> void
 agex::SurfaceSegmentation<PointT>::segment (pcl::PointCloud<pcl::Label> &labels,
                                            std::vector<pcl::PointIndices> &meshes)
 {
+  segmentInto (&labels, meshes);
+}
+
+template <typename PointT> void
+agex::SurfaceSegmentation<PointT>::segmentInto (pcl::PointCloud<pcl::Label> *labels,
+                                               std::vector<pcl::PointIndices> &meshes)
+{
   meshes.clear ();
-  labels.clear ();
+  if (labels)
+    labels->clear ();
   if (!initCompute ())
     return;
   if (!input_->isOrganized ())
@@ -40,28 +47,38 @@ agex::SurfaceSegmentation<PointT>::segment (pcl::PointCloud<pcl::Label> &labels,
   const PointCloud &cloud = *input_;
   const int width = static_cast<int> (cloud.width), height = static_cast<int> (cloud.height);
   const std::size_t n = cloud.size ();
-  std::vector<unsigned char> selected (n, 0);
+  if (selected_.size () != n)
+  {
+    selected_.assign (n, 0);
+    component_.assign (n, -1);
+  }
+  std::vector<unsigned char> &selected = selected_;
+  std::vector<int> &component = component_;
+  // Seeds in increasing index order, as a scan of the whole frame would meet them.
+  seeds_.clear ();
   for (const auto i : *indices_)
-    if (isFinitePoint (cloud[i]))
+    if (isFinitePoint (cloud[i]) && !selected[i])
+    {
       selected[i] = 1;
+      seeds_.push_back (i);
+    }
+  if (!std::is_sorted (seeds_.begin (), seeds_.end ()))
+    std::sort (seeds_.begin (), seeds_.end ());
 
   // Breadth-first flood fill over the connected 8-neighbours.
-  std::vector<int> component (n, -1);
   std::vector<pcl::PointIndices> found;
   std::vector<int> queue;
-  for (std::size_t seed = 0; seed < n; ++seed)
+  for (const int seed : seeds_)
   {
-    if (!selected[seed] || component[seed] >= 0)
+    if (component[seed] >= 0)
       continue;
     const int id = static_cast<int> (found.size ());
     found.emplace_back ();
-    auto &mesh = found.back ().indices;
-    queue.assign (1, static_cast<int> (seed));
+    queue.assign (1, seed);
     component[seed] = id;
     for (std::size_t head = 0; head < queue.size (); ++head)
     {
       const int i = queue[head];
-      mesh.push_back (i);
       const int u = i % width, v = i / width;
       for (const auto &d : kAllNeighbours)
       {
@@ -76,7 +93,14 @@ agex::SurfaceSegmentation<PointT>::segment (pcl::PointCloud<pcl::Label> &labels,
         queue.push_back (j);
       }
     }
-    std::sort (mesh.begin (), mesh.end ());
+    found.back ().indices.reserve (queue.size ());
+  }
+  // Each mesh's points in increasing order, as the seeds are: no sort needed.
+  for (const int i : seeds_)
+  {
+    found[static_cast<std::size_t> (component[i])].indices.push_back (i);
+    selected[i] = 0;
+    component[i] = -1;
   }
 
   // Keep meshes within the size limits, largest first; ties keep scan order.
@@ -91,19 +115,23 @@ agex::SurfaceSegmentation<PointT>::segment (pcl::PointCloud<pcl::Label> &labels,
     return found[a].indices.size () > found[b].indices.size ();
   });
 
-  labels.width = cloud.width;
-  labels.height = cloud.height;
-  labels.is_dense = cloud.is_dense;
-  labels.header = cloud.header;
-  labels.points.assign (n, pcl::Label ());
-  for (auto &l : labels.points)
-    l.label = kUnlabelled;
+  if (labels)
+  {
+    labels->width = cloud.width;
+    labels->height = cloud.height;
+    labels->is_dense = cloud.is_dense;
+    labels->header = cloud.header;
+    labels->points.assign (n, pcl::Label ());
+    for (auto &l : labels->points)
+      l.label = kUnlabelled;
+  }
   meshes.reserve (order.size ());
   for (const int id : order)
   {
     const auto label = static_cast<std::uint32_t> (meshes.size ());
-    for (const auto i : found[id].indices)
-      labels[i].label = label;
+    if (labels)
+      for (const auto i : found[id].indices)
+        (*labels)[i].label = label;
     found[id].header = cloud.header;
     meshes.push_back (std::move (found[id]));
   }

@@ -425,6 +425,120 @@ TEST (PipelineFloor, DeskTopLargerThanTheFloorIsNotTakenForIt)
 }
 
 // ---------------------------------------------------------------------------
+// One pipeline for a stream of frames, as the detector holds it: its stages keep their
+// buffers between frames and only clear what the last frame used.
+
+void
+expectSameResult (const PipelineResult &expected, const PipelineResult &actual, const std::string &what)
+{
+  ASSERT_TRUE (expected.filtered && actual.filtered) << what;
+  ASSERT_EQ (expected.filtered->size (), actual.filtered->size ()) << what;
+  int differences = 0;
+  for (std::size_t i = 0; i < expected.filtered->size (); ++i)
+  {
+    const auto &a = (*expected.filtered)[i], &b = (*actual.filtered)[i];
+    differences += bits (a.x) != bits (b.x) || bits (a.y) != bits (b.y) || bits (a.z) != bits (b.z);
+  }
+  EXPECT_EQ (differences, 0) << what << ": filtered points differ";
+  ASSERT_EQ (expected.meshes.size (), actual.meshes.size ()) << what;
+  for (std::size_t m = 0; m < expected.meshes.size (); ++m)
+    EXPECT_EQ (expected.meshes[m].indices, actual.meshes[m].indices) << what << ", mesh " << m;
+  ASSERT_EQ (expected.interest_points.size (), actual.interest_points.size ()) << what;
+  for (std::size_t k = 0; k < expected.interest_points.size (); ++k)
+  {
+    EXPECT_EQ (expected.interest_points[k].u, actual.interest_points[k].u) << what << ", point " << k;
+    EXPECT_EQ (expected.interest_points[k].v, actual.interest_points[k].v) << what << ", point " << k;
+  }
+  EXPECT_EQ (expected.persons.size (), actual.persons.size ()) << what;
+  EXPECT_EQ (expected.mesh_person, actual.mesh_person) << what;
+  EXPECT_EQ (expected.mixed_pixels_removed, actual.mixed_pixels_removed) << what;
+  EXPECT_EQ (expected.spur_iterations, actual.spur_iterations) << what;
+}
+
+TEST (PipelineStream, OnePipelineGivesWhatANewOneGivesFrameAfterFrame)
+{
+  // Real frames at two resolutions in turn (the buffers change size), and one frame
+  // limited by setIndices (its side margins left out), through one pipeline; each result
+  // against a new pipeline's.
+  std::vector<Cloud::Ptr> portraits, fulls;
+  for (const Keyframe &key : kArmsDownKeyframes)
+  {
+    AGEX_REQUIRE_BONN (bonnFrame (key.sequence, key.frame));
+    const agex::Frame frame = agex::loadFrame (bonnFrame (key.sequence, key.frame));
+    Cloud::Ptr portrait (new Cloud);
+    agex::applyView (*frame.cloud, agex::bonnPortraitView (), *portrait);
+    portraits.push_back (portrait);
+    fulls.push_back (frame.cloud);
+  }
+  const std::vector<Cloud::Ptr> frames{portraits[0], portraits[1], fulls[0], fulls[1], portraits[2], fulls[2]};
+  agex::DepthPipeline<pcl::PointXYZ> stream;
+  stream.setParams (PipelineParams ());
+  const Cloud *last_buffer = nullptr;
+  int reused = 0;
+  for (std::size_t f = 0; f < frames.size () + 2; ++f)
+  {
+    const Cloud::Ptr &cloud = frames[f % frames.size ()];
+    const std::string what = "frame " + std::to_string (f);
+    pcl::IndicesPtr margins_off;
+    if (f == 3)
+    {
+      margins_off.reset (new pcl::Indices);
+      for (int i = 0; i < static_cast<int> (cloud->size ()); ++i)
+        if (i % static_cast<int> (cloud->width) >= 10 && i % static_cast<int> (cloud->width) < static_cast<int> (cloud->width) - 10)
+          margins_off->push_back (i);
+    }
+    agex::DepthPipeline<pcl::PointXYZ> fresh;
+    fresh.setParams (PipelineParams ());
+    fresh.setInputCloud (cloud);
+    if (margins_off)
+      fresh.setIndices (margins_off);
+    PipelineResult expected;
+    fresh.compute (expected);
+    ASSERT_FALSE (expected.meshes.empty ()) << what;
+
+    stream.setInputCloud (cloud);
+    stream.setIndices (margins_off);  // null: the whole frame
+    PipelineResult actual;
+    stream.compute (actual);
+    expectSameResult (expected, actual, what);
+    reused += actual.filtered.get () == last_buffer;
+    last_buffer = actual.filtered.get ();
+  }
+  EXPECT_GE (reused, 1) << "the pipeline never reused its frame buffer";
+}
+
+TEST (PipelineStream, AResultStillHeldIsNotOverwrittenByTheNextFrame)
+{
+  const Keyframe first = kArmsDownKeyframes[0], second = kArmsDownKeyframes[1];
+  AGEX_REQUIRE_BONN (bonnFrame (first.sequence, first.frame));
+  AGEX_REQUIRE_BONN (bonnFrame (second.sequence, second.frame));
+  const Cloud::Ptr a = agex::loadFrame (bonnFrame (first.sequence, first.frame)).cloud;
+  const Cloud::Ptr b = agex::loadFrame (bonnFrame (second.sequence, second.frame)).cloud;
+  agex::DepthPipeline<pcl::PointXYZ> stream;
+  PipelineResult kept, next;
+  stream.setInputCloud (a);
+  stream.compute (kept);
+  const Cloud copy = *kept.filtered;
+  stream.setInputCloud (b);
+  stream.compute (next);
+  EXPECT_NE (kept.filtered.get (), next.filtered.get ());
+  ASSERT_EQ (copy.size (), kept.filtered->size ());
+  int differences = 0;
+  for (std::size_t i = 0; i < copy.size (); ++i)
+    differences += bits (copy[i].z) != bits ((*kept.filtered)[i].z);
+  EXPECT_EQ (differences, 0);
+  // A result given back to compute () lets go of its buffer first: refilled in place.
+  const Cloud *buffer = next.filtered.get ();
+  stream.setInputCloud (a);
+  stream.compute (next);
+  EXPECT_EQ (next.filtered.get (), buffer);
+  differences = 0;
+  for (std::size_t i = 0; i < copy.size (); ++i)
+    differences += bits (copy[i].z) != bits ((*next.filtered)[i].z);
+  EXPECT_EQ (differences, 0) << "frame a again, in the reused buffer";
+}
+
+// ---------------------------------------------------------------------------
 // 7. Degenerate input to the whole pipeline
 
 

@@ -114,8 +114,11 @@ benchDataset (const std::string &spec, bool keyframes_only, const LoadedDetector
   std::atomic<std::size_t> next{0};
   const auto start = std::chrono::steady_clock::now ();
   jobs = runWorkers (jobs, clouds.size (), [&] () {
+    BodyPartDetector<pcl::PointXYZ> detector;  // one per thread, for all its frames
+    setup (detector);
+    detector.setFocalLength (fx, fy);
     for (std::size_t i = next++; i < clouds.size (); i = next++)
-      timeDetection (clouds[i], setup, fx, fy);
+      timeDetection (detector, clouds[i]);
   });
   const double seconds = std::chrono::duration<double> (std::chrono::steady_clock::now () - start).count ();
   const double fps = seconds > 0 ? clouds.size () / seconds : 0.0;

@@ -55,9 +55,14 @@ using DetectorSetup = std::function<void (BodyPartDetector<pcl::PointXYZ> &)>;
 
 /** \brief Milliseconds of one detection: a detector made, set up, given the focal length
   * (fx, fy) and cloud, and run; each stage as the detector times it, then "total" (all of it,
-  * the detector's construction included). */
+  * the detector's construction included: a first frame's cost). */
 std::vector<std::pair<std::string, double>> timeDetection (const pcl::PointCloud<pcl::PointXYZ>::ConstPtr &cloud,
                                                            const DetectorSetup &setup, float fx, float fy);
+
+/** \brief Milliseconds of one detection by a detector that is already set up (and may have
+  * run on earlier frames, as in a stream): each stage, then "total" (the whole compute ()). */
+std::vector<std::pair<std::string, double>> timeDetection (BodyPartDetector<pcl::PointXYZ> &detector,
+                                                           const pcl::PointCloud<pcl::PointXYZ>::ConstPtr &cloud);
 
 /** The whole detector over frames (benchmarkDetector). */
 struct DetectorBenchmark
@@ -69,7 +74,8 @@ struct DetectorBenchmark
 };
 
 /** \brief Times the detector on every frame passes times after one untimed run on the first
-  * frame (caches, lazy allocations). progress (done, total) is called after each frame.
+  * frame (caches, lazy allocations): one detector for all of them, as a program processing a
+  * stream of frames holds it. progress (done, total) is called after each frame.
   * \throws std::invalid_argument when clouds is empty */
 DetectorBenchmark benchmarkDetector (const std::vector<pcl::PointCloud<pcl::PointXYZ>::ConstPtr> &clouds,
                                      const DetectorSetup &setup, float fx, float fy, int passes,

@@ -138,6 +138,7 @@ private:
   DetectorModel::ConstPtr model_;
   DetectorSettings settings_;
   DepthPipelineResult intermediate_;
+  DepthPipeline<PointT> pipeline_;  ///< kept across frames with its buffers
   std::size_t patches_classified_ = 0;
   BodyPartForest::ConstPtr forest_;
   DetectorMode mode_ = DetectorMode::Model;

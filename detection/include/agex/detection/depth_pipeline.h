@@ -1,7 +1,12 @@
 #pragma once
 
 #include <agex/common/point_types.h>
+#include <agex/filters/depth_median_filter.h>
+#include <agex/filters/mixed_pixel_filter.h>
 #include <agex/filters/person_segmentation.h>
+#include <agex/filters/spur_filter.h>
+#include <agex/filters/surface_segmentation.h>
+#include <agex/keypoints/agex_keypoint.h>
 
 #include <pcl/PointIndices.h>
 #include <pcl/pcl_base.h>
@@ -133,7 +138,9 @@ public:
   }
   const DepthPipelineParams &getParams () const { return params_; }
 
-  /** Runs every stage on the input cloud; result is replaced. */
+  /** Runs every stage on the input cloud; result is replaced. result.filtered is this
+    * pipeline's buffer: the next compute () refills it in place when no result holds it any
+    * longer (result itself lets go of it first), else it makes a new one. */
   void compute (DepthPipelineResult &result);
 
 protected:
@@ -142,7 +149,26 @@ protected:
   using pcl::PCLBase<PointT>::use_indices_;
 
 private:
+  /** The input as XYZ: the input itself when it is a whole XYZ frame, else a copy with the
+    * pixels outside setIndices invalid. */
+  pcl::PointCloud<pcl::PointXYZ>::ConstPtr xyzFrame () const;
+
+  /** filtered_ = frame's points_, NaN everywhere else. */
+  void startFilteredFrame (const pcl::PointCloud<pcl::PointXYZ> &frame);
+
   DepthPipelineParams params_;
+  // The stages, and what they keep between frames: a pipeline run on frame after frame
+  // does not allocate (and page in) frame-sized buffers anew for each.
+  agex::PersonSegmentation<pcl::PointXYZ> people_;
+  agex::MixedPixelFilter<pcl::PointXYZ> mixed_;
+  agex::DepthMedianFilter<pcl::PointXYZ> median_;
+  agex::SpurFilter<pcl::PointXYZ> spurs_;
+  agex::SurfaceSegmentation<pcl::PointXYZ> segmentation_;
+  agex::AGEXKeypoint<pcl::PointXYZ, agex::InterestPoint> agex_;
+  pcl::PointCloud<pcl::Label> person_labels_;
+  pcl::IndicesPtr points_ {new pcl::Indices};  ///< the points kept so far, in increasing order
+  pcl::PointCloud<pcl::PointXYZ>::Ptr filtered_;  ///< the result's frame, reused once no result holds it
+  pcl::Indices filtered_points_;                   ///< the points of filtered_ that may be finite
 };
 
 /** The pipeline run once on cloud with params (DepthPipeline<pcl::PointXYZ> in one call).

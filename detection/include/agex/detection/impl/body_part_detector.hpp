@@ -60,11 +60,10 @@ agex::BodyPartDetector<PointT>::compute (std::vector<BodyPartDetection> &detecti
     PCL_ERROR ("[agex::BodyPartDetector::compute] The forest mode and fused models need a forest (setForest).\n");
     return;
   }
-  DepthPipeline<PointT> pipeline (settings_.pipeline);
-  pipeline.setInputCloud (input_);
-  if (use_indices_)
-    pipeline.setIndices (indices_);
-  pipeline.compute (intermediate_);
+  pipeline_.setParams (settings_.pipeline);
+  pipeline_.setInputCloud (input_);
+  pipeline_.setIndices (use_indices_ ? indices_ : pcl::IndicesPtr ());
+  pipeline_.compute (intermediate_);
   double total = intermediate_.ms.empty () ? 0.0 : intermediate_.ms.back ().second;
   intermediate_.ms.pop_back ();  // the total, given again below with the later stages'
   const std::size_t first_later_stage = intermediate_.ms.size ();

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <agex/common/organized_neighbourhood.h>
 #include <agex/common/statistics.h>
 #include <agex/detection/depth_pipeline.h>
 #include <agex/filters/depth_median_filter.h>
@@ -14,6 +15,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <type_traits>
 #include <cmath>
 #include <limits>
 
@@ -28,14 +30,19 @@ invalidate (pcl::PointXYZ &p)
 }
 
 /** Erosion passes that take spur_depth metres off every edge whatever the resolution,
-  * measured with the median spacing of horizontally adjacent points (0: no spacing). */
+  * measured with the median spacing of horizontally adjacent points (0: no spacing):
+  * every seventh pixel of the frame, among the finite ones (points, in increasing order). */
 inline int
-autoSpurIterations (const pcl::PointCloud<pcl::PointXYZ> &cloud, float spur_depth)
+autoSpurIterations (const pcl::PointCloud<pcl::PointXYZ> &cloud, const pcl::Indices &points, float spur_depth)
 {
   std::vector<float> spacing;
-  for (std::size_t i = 0; i + 1 < cloud.size (); i += 7)
-    if (std::isfinite (cloud[i].z) && std::isfinite (cloud[i + 1].z) && (i + 1) % cloud.width != 0)
+  for (const auto index : points)
+  {
+    const auto i = static_cast<std::size_t> (index);
+    if (i % 7 == 0 && i + 1 < cloud.size () && std::isfinite (cloud[i].z) && std::isfinite (cloud[i + 1].z) &&
+        (i + 1) % cloud.width != 0)
       spacing.push_back ((cloud[i].getVector3fMap () - cloud[i + 1].getVector3fMap ()).norm ());
+  }
   if (spacing.empty ())
     return 0;
   std::nth_element (spacing.begin (), spacing.begin () + spacing.size () / 2, spacing.end ());
@@ -44,20 +51,39 @@ autoSpurIterations (const pcl::PointCloud<pcl::PointXYZ> &cloud, float spur_dept
     return 0;
   return std::clamp (static_cast<int> (std::lround (spur_depth / median_spacing)), 1, 16);
 }
+
+/** The points of sorted that are not in removed, a sorted subsequence of it. */
+inline void
+removeSortedSubset (pcl::Indices &sorted, const pcl::Indices &removed)
+{
+  if (removed.empty ())
+    return;
+  std::size_t out = 0, r = 0;
+  for (std::size_t i = 0; i < sorted.size (); ++i)
+  {
+    while (r < removed.size () && removed[r] < sorted[i])
+      ++r;
+    if (r < removed.size () && removed[r] == sorted[i])
+      continue;
+    sorted[out++] = sorted[i];
+  }
+  sorted.resize (out);
+}
 }  // namespace detail
 }  // namespace agex
 
-template <typename PointT> void
-agex::DepthPipeline<PointT>::compute (DepthPipelineResult &result)
+template <typename PointT> pcl::PointCloud<pcl::PointXYZ>::ConstPtr
+agex::DepthPipeline<PointT>::xyzFrame () const
 {
   using Cloud = pcl::PointCloud<pcl::PointXYZ>;
-  using Clock = std::chrono::steady_clock;
-  result = DepthPipelineResult ();
-  const DepthPipelineParams &params = params_;
+  const bool limited = use_indices_ && indices_;
+  if constexpr (std::is_same<PointT, pcl::PointXYZ>::value)
+    if (input_ && !limited)
+      return input_;  // read only: no copy of the frame
   Cloud::Ptr cloud (new Cloud);
   if (input_)
     pcl::copyPointCloud (*input_, *cloud);
-  if (use_indices_ && indices_)
+  if (limited)
   {
     std::vector<unsigned char> given (cloud->size (), 0);
     for (const auto i : *indices_)
@@ -67,43 +93,86 @@ agex::DepthPipeline<PointT>::compute (DepthPipelineResult &result)
       if (!given[i])
         detail::invalidate ((*cloud)[i]);
   }
-  const bool organized = cloud->isOrganized () && !cloud->empty ();
+  return cloud;
+}
+
+template <typename PointT> void
+agex::DepthPipeline<PointT>::startFilteredFrame (const pcl::PointCloud<pcl::PointXYZ> &frame)
+{
+  using Cloud = pcl::PointCloud<pcl::PointXYZ>;
+  pcl::PointXYZ nan;
+  detail::invalidate (nan);
+  // The last frame's buffer is reused once no result holds it: then only the points it
+  // was given are cleared, not the whole frame (which would be paged in anew each time).
+  if (!filtered_ || filtered_.use_count () > 1 || filtered_->width != frame.width ||
+      filtered_->height != frame.height)
+  {
+    filtered_.reset (new Cloud);
+    filtered_->points.assign (frame.size (), nan);
+  }
+  else
+    for (const auto i : filtered_points_)
+      (*filtered_)[i] = nan;
+  filtered_->width = frame.width;
+  filtered_->height = frame.height;
+  filtered_->is_dense = false;
+  filtered_->header = frame.header;
+  filtered_->sensor_origin_ = frame.sensor_origin_;
+  filtered_->sensor_orientation_ = frame.sensor_orientation_;
+  for (const auto i : *points_)
+    (*filtered_)[i] = frame[i];
+  filtered_points_ = *points_;
+}
+
+template <typename PointT> void
+agex::DepthPipeline<PointT>::compute (DepthPipelineResult &result)
+{
+  using Clock = std::chrono::steady_clock;
+  result = DepthPipelineResult ();  // lets go of the last frame's buffer, if result held it
+  const DepthPipelineParams &params = params_;
+  auto start = Clock::now ();
+  const pcl::PointCloud<pcl::PointXYZ>::ConstPtr frame = xyzFrame ();
+  const bool organized = frame->isOrganized () && !frame->empty ();
 
   // 1. Which points we keep: the people's pixels, within the crop box if there is one.
-  auto start = Clock::now ();
+  // points_ holds them from here on, in increasing order: every later stage works on them
+  // alone, never on the whole frame.
   pcl::IndicesPtr inside (new pcl::Indices);
-  pcl::PointCloud<pcl::Label> person_labels;
-  bool people_floor = false;
+  person_labels_.clear ();
   if (params.isolate_people && organized)
   {
-    agex::PersonSegmentation<pcl::PointXYZ> people;
-    people.setInputCloud (cloud);
-    people.setUpAxis (params.up);
-    people.setFloorMaxTilt (params.floor_max_tilt_deg);
-    people.setFloorDistance (params.floor_distance);
-    people.segment (person_labels, result.persons);
-    result.person_info = people.getPersons ();
-    people_floor = people.getFloorFound ();
-    if (people_floor)
+    people_.setInputCloud (frame);
+    people_.setUpAxis (params.up);
+    people_.setFloorMaxTilt (params.floor_max_tilt_deg);
+    people_.setFloorDistance (params.floor_distance);
+    people_.segment (person_labels_, result.persons);
+    result.person_info = people_.getPersons ();
+    if (people_.getFloorFound ())
     {
       result.floor_found = true;
-      result.floor_plane = people.getFloorPlane ();
+      result.floor_plane = people_.getFloorPlane ();
     }
+    // Each person's pixels come sorted: merged, not sorted again.
     for (const auto &person : result.persons)
+    {
+      const auto middle = static_cast<std::ptrdiff_t> (inside->size ());
       inside->insert (inside->end (), person.indices.begin (), person.indices.end ());
-    std::sort (inside->begin (), inside->end ());
+      std::inplace_merge (inside->begin (), inside->begin () + middle, inside->end ());
+    }
   }
   else
   {
-    for (std::size_t i = 0; i < cloud->size (); ++i)
-      inside->push_back (static_cast<int> (i));
+    inside->reserve (frame->size ());
+    for (std::size_t i = 0; i < frame->size (); ++i)
+      if (agex::isFinitePoint ((*frame)[i]))
+        inside->push_back (static_cast<int> (i));
   }
   result.ms.emplace_back ("people", msSince (start));
   start = Clock::now ();
   if (params.use_crop_box || !params.isolate_people)
   {
     pcl::CropBox<pcl::PointXYZ> crop;
-    crop.setInputCloud (cloud);
+    crop.setInputCloud (frame);
     crop.setIndices (inside);
     crop.setMin (Eigen::Vector4f (params.crop_min.x (), params.crop_min.y (), params.crop_min.z (), 1.f));
     crop.setMax (Eigen::Vector4f (params.crop_max.x (), params.crop_max.y (), params.crop_max.z (), 1.f));
@@ -114,56 +183,49 @@ agex::DepthPipeline<PointT>::compute (DepthPipelineResult &result)
   result.ms.emplace_back ("crop", msSince (start));
 
   // 2. Mixed pixels among the kept points, judged against neighbours from the whole
-  // frame: outside the box the far side of a silhouette is still there to be seen.
+  // frame: outside the box the far side of a silhouette is still there to be seen. The
+  // points left are copied into the filtered frame, NaN everywhere else.
   start = Clock::now ();
-  std::vector<unsigned char> keep (cloud->size (), 0);
-  for (const auto i : *inside)
-    keep[i] = 1;
+  points_->assign (inside->begin (), inside->end ());
   if (params.remove_mixed_pixels && organized && !inside->empty ())
   {
-    agex::MixedPixelFilter<pcl::PointXYZ> mixed;
-    mixed.setInputCloud (cloud);
-    mixed.setIndices (inside);
-    mixed.setWindowRadius (params.mixed_window_radius);
-    mixed.setMinJump (params.mixed_min_jump);
-    mixed.setMinJumpGrowth (2.5f * params.depth_step_growth);
-    mixed.setMaxVeilAngle (params.mixed_max_veil_angle_deg);
-    mixed.setNegative (true);  // the mixed pixels themselves, to blank them
+    mixed_.setInputCloud (frame);
+    mixed_.setIndices (inside);
+    mixed_.setWindowRadius (params.mixed_window_radius);
+    mixed_.setMinJump (params.mixed_min_jump);
+    mixed_.setMinJumpGrowth (2.5f * params.depth_step_growth);
+    mixed_.setMaxVeilAngle (params.mixed_max_veil_angle_deg);
+    mixed_.setNegative (true);  // the mixed pixels themselves, to leave out
     pcl::Indices flying;
-    mixed.filter (flying);
-    for (const auto i : flying)
-      keep[i] = 0;
+    mixed_.filter (flying);
+    detail::removeSortedSubset (*points_, flying);
     result.mixed_pixels_removed = static_cast<int> (flying.size ());
   }
-  for (std::size_t i = 0; i < cloud->size (); ++i)
-    if (!keep[i])
-      detail::invalidate ((*cloud)[i]);
+  startFilteredFrame (*frame);
+  pcl::PointCloud<pcl::PointXYZ> &cloud = *filtered_;
   result.ms.emplace_back ("mixed_pixels", msSince (start));
 
   // 3. Denoise depth: a median over each point's valid neighbours, moving the point along
-  // its pixel's viewing ray. Everything outside the box is NaN by now.
+  // its pixel's viewing ray. Everything but the kept points is NaN by now.
   start = Clock::now ();
-  if (params.median_window > 1 && organized)
+  if (params.median_window > 1 && organized && !points_->empty ())
   {
-    agex::DepthMedianFilter<pcl::PointXYZ> median_filter;
-    median_filter.setInputCloud (cloud);
-    median_filter.setWindowSize (params.median_window);
-    median_filter.setMaxAllowedMovement (params.median_max_movement);
-    median_filter.setKeepOnViewingRay (true);
-    Cloud::Ptr smoothed (new Cloud);
-    median_filter.filter (*smoothed);
-    if (!smoothed->empty ())
-      cloud = smoothed;
+    median_.setInputCloud (filtered_);
+    median_.setIndices (points_);
+    median_.setWindowSize (params.median_window);
+    median_.setMaxAllowedMovement (params.median_max_movement);
+    median_.setKeepOnViewingRay (true);
+    median_.filterInPlace (cloud);
   }
   result.ms.emplace_back ("denoise", msSince (start));
 
   // 4. Floor, and everything below it: the people's floor (their pixels are above it by
   // construction), else RANSAC's.
   start = Clock::now ();
-  if (params.remove_floor && !cloud->empty () && !params.isolate_people)
+  if (params.remove_floor && !cloud.empty () && !params.isolate_people)
   {
     agex::FloorRemoval<pcl::PointXYZ> floor;
-    floor.setInputCloud (cloud);
+    floor.setInputCloud (filtered_);
     floor.setUpAxis (params.up);
     floor.setMaxTilt (params.floor_max_tilt_deg);
     floor.setDistanceThreshold (params.floor_distance);
@@ -172,7 +234,9 @@ agex::DepthPipeline<PointT>::compute (DepthPipelineResult &result)
     pcl::Indices on_floor;
     floor.filter (on_floor);
     for (const auto i : on_floor)
-      detail::invalidate ((*cloud)[i]);
+      detail::invalidate (cloud[i]);
+    std::sort (on_floor.begin (), on_floor.end ());
+    detail::removeSortedSubset (*points_, on_floor);
     result.floor_found = floor.getFloorFound ();
     result.floor_plane = floor.getFloorPlane ();
   }
@@ -182,36 +246,37 @@ agex::DepthPipeline<PointT>::compute (DepthPipelineResult &result)
   start = Clock::now ();
   int spur_iterations = params.spur_iterations;
   if (spur_iterations < 0)
-    spur_iterations = organized ? detail::autoSpurIterations (*cloud, params.spur_depth) : 0;
+    spur_iterations = organized ? detail::autoSpurIterations (cloud, *points_, params.spur_depth) : 0;
   result.spur_iterations = spur_iterations;
-  if (spur_iterations > 0 && organized)
+  if (spur_iterations > 0 && organized && !points_->empty ())
   {
-    agex::SpurFilter<pcl::PointXYZ> spurs;
-    spurs.setInputCloud (cloud);
-    spurs.setMinConnected (params.spur_min_connected);
-    spurs.setIterations (spur_iterations);
-    spurs.setDeltaConnected (params.delta_connected);
-    spurs.setDeltaConnectedGrowth (1.5f * params.depth_step_growth);
-    spurs.setNegative (true);  // the spur points themselves, to blank them
+    spurs_.setInputCloud (filtered_);
+    spurs_.setIndices (points_);
+    spurs_.setMinConnected (params.spur_min_connected);
+    spurs_.setIterations (spur_iterations);
+    spurs_.setDeltaConnected (params.delta_connected);
+    spurs_.setDeltaConnectedGrowth (1.5f * params.depth_step_growth);
+    spurs_.setNegative (true);  // the spur points themselves, to blank them
     pcl::Indices removed;
-    spurs.filter (removed);
+    spurs_.filter (removed);
     for (const auto i : removed)
-      detail::invalidate ((*cloud)[i]);
+      detail::invalidate (cloud[i]);
+    detail::removeSortedSubset (*points_, removed);
   }
   result.ms.emplace_back ("spurs", msSince (start));
 
   // 6. Surface meshes.
   start = Clock::now ();
   const int min_mesh = params.min_mesh_size >= 0 ? params.min_mesh_size
-                                                 : std::max (1, static_cast<int> (cloud->size () / 1000));
+                                                 : std::max (1, static_cast<int> (cloud.size () / 1000));
   if (organized)
   {
-    agex::SurfaceSegmentation<pcl::PointXYZ> segmentation;
-    segmentation.setInputCloud (cloud);
-    segmentation.setDeltaConnected (params.delta_connected);
-    segmentation.setDeltaConnectedGrowth (1.5f * params.depth_step_growth);
-    segmentation.setMinMeshSize (static_cast<std::size_t> (min_mesh));
-    segmentation.segment (result.meshes);
+    segmentation_.setInputCloud (filtered_);
+    segmentation_.setIndices (points_);
+    segmentation_.setDeltaConnected (params.delta_connected);
+    segmentation_.setDeltaConnectedGrowth (1.5f * params.depth_step_growth);
+    segmentation_.setMinMeshSize (static_cast<std::size_t> (min_mesh));
+    segmentation_.segment (result.meshes);
   }
   result.ms.emplace_back ("segmentation", msSince (start));
 
@@ -219,8 +284,8 @@ agex::DepthPipeline<PointT>::compute (DepthPipelineResult &result)
   start = Clock::now ();
   if (organized)
   {
-    agex::AGEXKeypoint<pcl::PointXYZ, agex::InterestPoint> agex;
-    agex.setInputCloud (cloud);
+    auto &agex = agex_;
+    agex.setInputCloud (filtered_);
     agex.setMeshes (result.meshes);
     agex.setPointsPerMesh (params.k);
     agex.setDeltaConnected (params.delta_connected);
@@ -232,14 +297,23 @@ agex::DepthPipeline<PointT>::compute (DepthPipelineResult &result)
     agex.compute (result.interest_points);
   }
   result.ms.emplace_back ("agex", msSince (start));
-  result.mesh_person = params.isolate_people ? agex::personOfMeshes (person_labels, result.meshes)
-                                             : std::vector<int> (result.meshes.size (), -1);
+  result.mesh_person = params.isolate_people && organized ? agex::personOfMeshes (person_labels_, result.meshes)
+                                                          : std::vector<int> (result.meshes.size (), -1);
 
   double total = 0.0;
   for (const auto &stage : result.ms)
     total += stage.second;
   result.ms.emplace_back ("total", total);
-  result.filtered = cloud;
+  result.filtered = filtered_;
+  // The stages let go of the frames: the user's input is not kept alive, and filtered_ is
+  // held by the result alone, so that the next frame can reuse it.
+  const pcl::PointCloud<pcl::PointXYZ>::ConstPtr none;
+  people_.setInputCloud (none);
+  mixed_.setInputCloud (none);
+  median_.setInputCloud (none);
+  spurs_.setInputCloud (none);
+  segmentation_.setInputCloud (none);
+  agex_.setInputCloud (none);
 }
 
 #define PCL_INSTANTIATE_DepthPipeline(T) template class PCL_EXPORTS agex::DepthPipeline<T>;

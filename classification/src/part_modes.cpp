@@ -20,7 +20,8 @@ struct Sample
   Eigen::Vector3f x;
   float w;    ///< p z^2
   float p;
-  int index;  ///< into the label cloud
+  int index;      ///< into the label cloud
+  int slot = -1;  ///< into the body's pixels, for a sample of one
 };
 
 std::int64_t
@@ -56,16 +57,19 @@ groupByCell (const std::vector<Sample> &samples, float size)
   return cells;
 }
 
-/** Points hashed into cubic cells of a given size. */
+/** Points hashed into cubic cells of a given size; cells numbered 0..cellCount () - 1. */
 class Grid
 {
 public:
-  Grid (const std::vector<Sample> &samples, float cell) : samples_ (samples), cell_ (cell)
+  Grid (const std::vector<Sample> &samples, float cell) : cell_ (cell)
   {
     for (std::size_t i = 0; i < samples.size (); ++i)
     {
       const Eigen::Vector3i c = coords (samples[i].x);
-      cells_[cellKey (c.x (), c.y (), c.z ())].push_back (static_cast<int> (i));
+      const auto inserted = ids_.emplace (cellKey (c.x (), c.y (), c.z ()), static_cast<int> (cells_.size ()));
+      if (inserted.second)
+        cells_.emplace_back ();
+      cells_[static_cast<std::size_t> (inserted.first->second)].push_back (static_cast<int> (i));
     }
   }
   Eigen::Vector3i coords (const Eigen::Vector3f &x) const
@@ -73,31 +77,55 @@ public:
     return Eigen::Vector3i (static_cast<int> (std::floor (x.x () / cell_)), static_cast<int> (std::floor (x.y () / cell_)),
                             static_cast<int> (std::floor (x.z () / cell_)));
   }
-  /** Calls fn (sample index) for every sample in the 27 cells around x. */
+  std::size_t cellCount () const { return cells_.size (); }
+  const std::vector<int> &cell (int id) const { return cells_[static_cast<std::size_t> (id)]; }
+  /** Calls fn (cell id) for every non-empty cell of the 27 around x. */
   template <typename Fn>
-  void around (const Eigen::Vector3f &x, Fn fn) const
+  void aroundCells (const Eigen::Vector3f &x, Fn fn) const
   {
     const Eigen::Vector3i c = coords (x);
     for (int i = -1; i <= 1; ++i)
       for (int j = -1; j <= 1; ++j)
         for (int k = -1; k <= 1; ++k)
         {
-          const auto it = cells_.find (cellKey (c.x () + i, c.y () + j, c.z () + k));
-          if (it != cells_.end ())
-            for (const int s : it->second)
-              fn (s);
+          const auto it = ids_.find (cellKey (c.x () + i, c.y () + j, c.z () + k));
+          if (it != ids_.end ())
+            fn (it->second);
         }
+  }
+  /** Calls fn (sample index) for every sample in the 27 cells around x. */
+  template <typename Fn>
+  void around (const Eigen::Vector3f &x, Fn fn) const
+  {
+    aroundCells (x, [&] (int id) {
+      for (const int s : cells_[static_cast<std::size_t> (id)])
+        fn (s);
+    });
   }
 
 private:
-  const std::vector<Sample> &samples_;
   float cell_;
-  std::unordered_map<std::int64_t, std::vector<int>> cells_;
+  std::unordered_map<std::int64_t, int> ids_;
+  std::vector<std::vector<int>> cells_;
 };
 }  // namespace
 
 bool
 PartModeEstimation::compute (const pcl::PointCloud<BodyPartLabelPoint> &labels, std::vector<PartMode> &modes) const
+{
+  return computeFrom (labels, nullptr, modes);
+}
+
+bool
+PartModeEstimation::compute (const pcl::PointCloud<BodyPartLabelPoint> &labels, const pcl::Indices &pixels,
+                             std::vector<PartMode> &modes) const
+{
+  return computeFrom (labels, &pixels, modes);
+}
+
+bool
+PartModeEstimation::computeFrom (const pcl::PointCloud<BodyPartLabelPoint> &labels, const pcl::Indices *pixels,
+                                 std::vector<PartMode> &modes) const
 {
   modes.clear ();
   const PartModeParams &P = params_;
@@ -134,7 +162,25 @@ PartModeEstimation::compute (const pcl::PointCloud<BodyPartLabelPoint> &labels, 
   };
   // Rows and columns stepped, not each pixel's index divided: the divisions were half of
   // this function's time on a 640x480 frame.
-  if (stepped)
+  if (pixels)
+  {
+    // The given pixels on the step's grid, in raster order: the scan below, without the
+    // rest of the frame.
+    std::vector<std::size_t> order;
+    order.reserve (pixels->size () / (stepped ? step * step : 1));
+    for (const auto index : *pixels)
+    {
+      if (index < 0 || static_cast<std::size_t> (index) >= labels.size () ||
+          (stepped && ((static_cast<std::size_t> (index) % width) % step || (static_cast<std::size_t> (index) / width) % step)))
+        continue;
+      order.push_back (static_cast<std::size_t> (index));
+    }
+    std::sort (order.begin (), order.end ());
+    order.erase (std::unique (order.begin (), order.end ()), order.end ());
+    for (const std::size_t i : order)
+      visit (i);
+  }
+  else if (stepped)
   {
     for (std::size_t row = 0; row < labels.size () / width; row += step)
       for (std::size_t col = 0; col < width; col += step)
@@ -151,14 +197,12 @@ PartModeEstimation::compute (const pcl::PointCloud<BodyPartLabelPoint> &labels, 
   // The body's pixels in cells of the contact radius, for every mode's base below.
   std::vector<Sample> body_points;
   body_points.reserve (body.size ());
-  std::vector<int> body_slot (labels.size (), -1);
   for (const int i : body)
-  {
-    body_slot[static_cast<std::size_t> (i)] = static_cast<int> (body_points.size ());
     body_points.push_back ({labels[static_cast<std::size_t> (i)].getVector3fMap (), 0.f, 0.f, i});
-  }
   const Grid body_grid (body_points, P.contact_radius);
   std::vector<unsigned> support_stamp (body_points.size (), 0u), touched_stamp (body_points.size (), 0u);
+  std::vector<unsigned> cell_stamp (body_grid.cellCount (), 0u);  // cell_left is current for this mode
+  std::vector<int> cell_left (body_grid.cellCount (), 0);         // body pixels neither support nor touching
   unsigned visit_stamp = 0;
   const float pixel_area = (stepped ? static_cast<float> (step * step) : 1.f) / (P.fx * P.fy);
 
@@ -168,12 +212,12 @@ PartModeEstimation::compute (const pcl::PointCloud<BodyPartLabelPoint> &labels, 
       continue;
     const float b = P.bandwidth[part];
     std::vector<Sample> samples;
-    for (const int i : body)
+    for (std::size_t k = 0; k < body.size (); ++k)
     {
-      const auto &q = labels[static_cast<std::size_t> (i)];
+      const auto &q = labels[static_cast<std::size_t> (body[k])];
       const float p = q.probability (part);
       if (std::isfinite (p) && p >= P.probability_threshold && p > 0.f)
-        samples.push_back ({q.getVector3fMap (), p * q.z * q.z, p, i});
+        samples.push_back ({q.getVector3fMap (), p * q.z * q.z, p, body[k], static_cast<int> (k)});
     }
     if (samples.empty ())
       continue;
@@ -274,17 +318,37 @@ PartModeEstimation::compute (const pcl::PointCloud<BodyPartLabelPoint> &labels, 
       // supporting pixel), then summed in body order: the same sum as testing every body pixel.
       ++visit_stamp;
       for (const int s : f.samples)
-        support_stamp[static_cast<std::size_t> (body_slot[static_cast<std::size_t> (samples[s].index)])] = visit_stamp;
+        support_stamp[static_cast<std::size_t> (samples[s].slot)] = visit_stamp;
       std::vector<int> touching;
       const float r2 = P.contact_radius * P.contact_radius;
+      // A cell whose body pixels are all support or already touching has nothing left to
+      // find: the support's interior is skipped cell by cell, not pixel by pixel.
+      const auto untouched = [&] (int c) -> int & {
+        if (cell_stamp[static_cast<std::size_t> (c)] != visit_stamp)
+        {
+          cell_stamp[static_cast<std::size_t> (c)] = visit_stamp;
+          int &left = cell_left[static_cast<std::size_t> (c)];
+          left = 0;
+          for (const int bj : body_grid.cell (c))
+            left += support_stamp[static_cast<std::size_t> (bj)] != visit_stamp;
+        }
+        return cell_left[static_cast<std::size_t> (c)];
+      };
       for (const int s : f.samples)
-        body_grid.around (samples[s].x, [&] (int bj) {
-          const auto j = static_cast<std::size_t> (bj);
-          if (support_stamp[j] != visit_stamp && touched_stamp[j] != visit_stamp &&
-              (body_points[j].x - samples[s].x).squaredNorm () <= r2)
+        body_grid.aroundCells (samples[s].x, [&] (int c) {
+          int &left = untouched (c);
+          if (left == 0)
+            return;
+          for (const int bj : body_grid.cell (c))
           {
-            touched_stamp[j] = visit_stamp;
-            touching.push_back (bj);
+            const auto j = static_cast<std::size_t> (bj);
+            if (support_stamp[j] != visit_stamp && touched_stamp[j] != visit_stamp &&
+                (body_points[j].x - samples[s].x).squaredNorm () <= r2)
+            {
+              touched_stamp[j] = visit_stamp;
+              touching.push_back (bj);
+              --left;
+            }
           }
         });
       std::sort (touching.begin (), touching.end ());

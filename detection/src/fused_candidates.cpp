@@ -92,7 +92,7 @@ labelPersonParts (const DepthPipelineResult &prepared, const BodyPartForest::Con
   params.fy = fy;
   params.pixel_step = stride;  // the representatives only: the other pixels copy them
   estimation.setParams (params);
-  const bool found = estimation.compute (labels, modes);
+  const bool found = estimation.compute (labels, body, modes);
   if (ms)
     *ms = {std::chrono::duration<double, std::milli> (labelled - start).count (),
            std::chrono::duration<double, std::milli> (std::chrono::steady_clock::now () - labelled).count ()};

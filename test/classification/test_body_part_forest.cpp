@@ -1020,6 +1020,68 @@ TEST (PartModeEstimation, PixelStepTakesEveryOtherRowAndColumn)
   }
 }
 
+// Given the pixels that may be labelled (the labelling stage's, here shuffled, with some
+// unlabelled ones and duplicates among them), the modes are those of the whole-frame scan, at
+// pixel step 1 and 2; pixels that leave out a labelled bar leave out its mode.
+TEST (PartModeEstimation, GivenPixelsGiveTheWholeFramesModes)
+{
+  pcl::PointCloud<agex::BodyPartLabelPoint> labels (81, 61);
+  const float f = 100.f;
+  pcl::Indices pixels, without_left_hand;
+  for (int v = 0; v < 61; ++v)
+    for (int u = 0; u < 81; ++u)
+    {
+      const int i = v * 81 + u;
+      const bool body = u >= 35 && u < 45;
+      const bool hand_l = v >= 27 && v < 33 && u >= 25 && u < 35;
+      const bool hand_r = v >= 27 && v < 32 && u >= 45 && u < 53;
+      if (u % 9 == 0 || body || hand_l || hand_r)
+      {
+        pixels.push_back (i);
+        if (!hand_l)
+          without_left_hand.push_back (i);
+      }
+      if (!body && !hand_l && !hand_r)
+        continue;
+      agex::BodyPartLabelPoint &q = labels (u, v);
+      q.z = 2.f + 0.002f * static_cast<float> (u % 5);
+      q.x = (u - 40.f) * q.z / f;
+      q.y = (v - 30.f) * q.z / f;
+      q.p_head = q.p_foot = 0.f;
+      q.p_hand = body ? 0.f : 0.85f;
+      q.p_other = 1.f - q.p_hand;
+      q.label = body ? agex::kLabelOtherBody : agex::kLabelHand;
+    }
+  pixels.push_back (pixels[17]);
+  pixels.push_back (-3);
+  pixels.push_back (81 * 61);
+  std::shuffle (pixels.begin (), pixels.end (), std::mt19937 (5));
+  agex::PartModeEstimation estimation;
+  agex::PartModeParams params;
+  params.fx = params.fy = f;
+  for (const int step : {1, 2})
+  {
+    params.pixel_step = step;
+    estimation.setParams (params);
+    std::vector<agex::PartMode> expected, modes;
+    ASSERT_TRUE (estimation.compute (labels, expected));
+    ASSERT_TRUE (estimation.compute (labels, pixels, modes));
+    ASSERT_EQ (expected.size (), 2u) << "step " << step;
+    ASSERT_EQ (modes.size (), expected.size ()) << "step " << step;
+    for (std::size_t m = 0; m < modes.size (); ++m)
+    {
+      EXPECT_EQ (modes[m].position, expected[m].position) << "step " << step;
+      EXPECT_EQ (modes[m].support, expected[m].support) << "step " << step;
+      EXPECT_EQ (modes[m].tip_index, expected[m].tip_index) << "step " << step;
+      EXPECT_EQ (modes[m].direction, expected[m].direction) << "step " << step;
+      EXPECT_EQ (modes[m].mass, expected[m].mass) << "step " << step;
+    }
+    ASSERT_TRUE (estimation.compute (labels, without_left_hand, modes));
+    ASSERT_EQ (modes.size (), 1u) << "step " << step;
+    EXPECT_GT (modes[0].position.x (), 0.f);
+  }
+}
+
 // --- training ----------------------------------------------------------------------------------
 
 namespace

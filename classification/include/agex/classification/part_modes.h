@@ -95,7 +95,16 @@ public:
   /** \return false (PCL_ERROR, no modes) if a parameter is out of range */
   bool compute (const pcl::PointCloud<BodyPartLabelPoint> &labels, std::vector<PartMode> &modes) const;
 
+  /** \brief compute () looking only at the given pixels of labels (any order, e.g. those the
+    * labelling stage was given), not at the whole frame: the same modes when every labelled
+    * pixel is among them. */
+  bool compute (const pcl::PointCloud<BodyPartLabelPoint> &labels, const pcl::Indices &pixels,
+                std::vector<PartMode> &modes) const;
+
 private:
+  bool computeFrom (const pcl::PointCloud<BodyPartLabelPoint> &labels, const pcl::Indices *pixels,
+                    std::vector<PartMode> &modes) const;
+
   PartModeParams params_;
 };
 }  // namespace agex

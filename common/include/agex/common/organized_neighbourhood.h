@@ -7,6 +7,8 @@
 #include <pcl/types.h>
 #include <algorithm>
 #include <cmath>
+#include <utility>
+#include <vector>
 
 namespace agex
 {
@@ -81,31 +83,34 @@ forEachOrganizedEdge (const pcl::PointCloud<PointT> &cloud, const unsigned char 
     }
 }
 
-/** A rectangle of pixels, inclusive; empty when u_min > u_max. */
-struct PixelBox
+/** Per image row, the columns [first, last] a filter with a window of margin pixels reads
+  * around the pixels of indices: from the leftmost to the rightmost column within margin of
+  * one of them in the rows within margin (empty when first > last). Tighter than one
+  * rectangle around all of them: people at different distances span different rows. */
+inline void
+rowSpans (const pcl::Indices &indices, int width, int height, int margin, std::vector<std::pair<int, int>> &spans)
 {
-  int u_min = 0, u_max = -1, v_min = 0, v_max = -1;
-  bool empty () const { return u_min > u_max || v_min > v_max; }
-};
-
-/** The smallest rectangle holding every pixel of indices, grown by margin pixels on each
-  * side and clipped to the width x height image: what a filter with a window of that radius
-  * reads around the points it filters. */
-inline PixelBox
-boundingPixelBox (const pcl::Indices &indices, int width, int height, int margin)
-{
-  PixelBox box;
-  if (indices.empty () || width <= 0 || height <= 0)
-    return box;
-  box.u_min = width, box.v_min = height;
+  spans.assign (height > 0 ? static_cast<std::size_t> (height) : 0u, {width, -1});
+  if (width <= 0 || height <= 0)
+    return;
+  std::vector<std::pair<int, int>> own (static_cast<std::size_t> (height), {width, -1});
   for (const auto index : indices)
   {
-    const int u = index % width, v = index / width;
-    box.u_min = std::min (box.u_min, u), box.u_max = std::max (box.u_max, u);
-    box.v_min = std::min (box.v_min, v), box.v_max = std::max (box.v_max, v);
+    const int v = index / width, u = index - v * width;
+    auto &row = own[static_cast<std::size_t> (v)];
+    row.first = std::min (row.first, u), row.second = std::max (row.second, u);
   }
-  box.u_min = std::max (0, box.u_min - margin), box.u_max = std::min (width - 1, box.u_max + margin);
-  box.v_min = std::max (0, box.v_min - margin), box.v_max = std::min (height - 1, box.v_max + margin);
-  return box;
+  for (int v = 0; v < height; ++v)
+  {
+    const auto &row = own[static_cast<std::size_t> (v)];
+    if (row.first > row.second)
+      continue;
+    for (int w = std::max (0, v - margin); w <= std::min (height - 1, v + margin); ++w)
+    {
+      auto &span = spans[static_cast<std::size_t> (w)];
+      span.first = std::min (span.first, std::max (0, row.first - margin));
+      span.second = std::max (span.second, std::min (width - 1, row.second + margin));
+    }
+  }
 }
 }  // namespace agex

@@ -3,6 +3,7 @@
 #include <pcl/filters/filter.h>
 
 #include <limits>
+#include <utility>
 #include <vector>
 
 namespace agex
@@ -95,6 +96,7 @@ private:
   float max_allowed_movement_ = std::numeric_limits<float>::max ();
   bool keep_on_viewing_ray_ = true;
   std::vector<float> depth_;    // z of each point, NaN where not finite; current around the points filtered
+  std::vector<std::pair<int, int>> spans_;  // per row, the columns read around the points
   std::vector<float> scratch_;  // window buffer for windows larger than kStackWindow
   static constexpr int kStackWindow = 3;
 };

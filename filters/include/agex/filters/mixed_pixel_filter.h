@@ -3,6 +3,7 @@
 #include <pcl/filters/filter_indices.h>
 
 #include <cmath>
+#include <utility>
 #include <vector>
 
 namespace agex
@@ -91,6 +92,7 @@ private:
   float max_veil_angle_deg_ = 15.f;
   float interior_margin_ = 0.1f;
   std::vector<float> ranges_;  // distance of each point from the sensor, current around the tested points
+  std::vector<std::pair<int, int>> spans_;  // per row, the columns read around the points
 };
 }  // namespace agex
 

@@ -141,10 +141,10 @@ agex::DepthMedianFilter<PointT>::prepare ()
   // the window loop then reads 4 bytes per neighbour instead of a whole point. Only the
   // windows around the filtered points are read, so only they are filled.
   const int width = static_cast<int> (input_->width);
-  const PixelBox box = boundingPixelBox (*indices_, width, static_cast<int> (input_->height), window_size_ / 2);
+  rowSpans (*indices_, width, static_cast<int> (input_->height), window_size_ / 2, spans_);
   depth_.resize (input_->size ());
-  for (int v = box.v_min; v <= box.v_max; ++v)
-    for (int u = box.u_min; u <= box.u_max; ++u)
+  for (int v = 0; v < static_cast<int> (input_->height); ++v)
+    for (int u = spans_[static_cast<std::size_t> (v)].first; u <= spans_[static_cast<std::size_t> (v)].second; ++u)
     {
       const std::size_t i = static_cast<std::size_t> (v) * width + u;
       const PointT &p = (*input_)[i];

@@ -100,10 +100,10 @@ agex::MixedPixelFilter<PointT>::applyFilter (pcl::Indices &indices)
   // Only the window around the tested points is read: the ranges of a person's pixels and
   // their neighbours, not of the whole frame (the rest of ranges_ may hold another frame's).
   const int width = static_cast<int> (input_->width);
-  const PixelBox box = boundingPixelBox (*indices_, width, static_cast<int> (input_->height), window_radius_);
+  rowSpans (*indices_, width, static_cast<int> (input_->height), window_radius_, spans_);
   ranges_.resize (input_->size ());
-  for (int v = box.v_min; v <= box.v_max; ++v)
-    for (int u = box.u_min; u <= box.u_max; ++u)
+  for (int v = 0; v < static_cast<int> (input_->height); ++v)
+    for (int u = spans_[static_cast<std::size_t> (v)].first; u <= spans_[static_cast<std::size_t> (v)].second; ++u)
     {
       const std::size_t i = static_cast<std::size_t> (v) * width + u;
       const PointT &p = (*input_)[i];

@@ -39,11 +39,12 @@ main (int argc, char **argv)
     const bool single = flags.inputs.size () == 1 && !std::filesystem::is_directory (flags.inputs[0]);
     agex::apps::checkDetectOutputs (flags, single, read);
 
+    agex::apps::DetectorPool detectors (loaded);  // one per thread, kept from frame to frame
     if (!flags.device.empty ())
       return agex::apps::runLiveDetection (flags.device, flags.fps, flags.frame_options, flags.json_path, flags.jobs,
                                            "agex_detect", [&] (const agex::SourceFrame &f) {
-                                             return agex::apps::detectFrame ({f.name, f.path}, loaded, flags, nullptr,
-                                                                             nullptr, &f);
+                                             return agex::apps::detectFrame ({f.name, f.path}, detectors, flags,
+                                                                             nullptr, nullptr, &f);
                                            });
     if (single && group->rank () > 0)
       return 0;  // one frame: rank 0's
@@ -51,7 +52,7 @@ main (int argc, char **argv)
       return agex::apps::detectSingleFrame (jobs[0], loaded, flags), 0;
     agex::apps::runDetectionBatch (jobs, flags.json_path, flags.jobs, flags.shard, *group, "agex_detect",
                                    [&] (const agex::apps::FrameJob &job) {
-                                     return agex::apps::detectFrame (job, loaded, flags);
+                                     return agex::apps::detectFrame (job, detectors, flags);
                                    });
     return 0;
   }

@@ -4,6 +4,7 @@
 
 #include "test_support.h"
 
+#include <agex/apps/detect_runs.h>
 #include <agex/apps/frame_jobs.h>
 #include <agex/apps/output.h>
 #include <agex/apps/output_guard.h>
@@ -339,5 +340,57 @@ TEST (FrameJobs, BatchSkipsDoneFramesAndKeepsWhatWasDoneAfterAFailure)
       {"d/5: damaged", "the frames done are kept in " + path2});
   const std::string written = readAll (path2);
   EXPECT_EQ (std::count (written.begin (), written.end (), '\n'), 5);
+}
+
+// agex_detect's detectors: one per thread at work, kept from frame to frame. A frame through a
+// detector that has seen others gives what a new detector gives, also when a PCD (no
+// intrinsics: focal lengths estimated) follows a depth image (intrinsics given).
+TEST (DetectorPool, AKeptDetectorGivesWhatANewOneGives)
+{
+  const std::string png = agex_test::sharedData ("bonn/depth/3/021.png");
+  const std::string other = agex_test::sharedData ("bonn/depth/7/001.png");
+  AGEX_REQUIRE_BONN (png);
+  AGEX_REQUIRE_BONN (other);
+  TempDir dir;
+  const std::string pcd = dir.file ("021.pcd");
+  ASSERT_EQ (pcl::io::savePCDFileBinary (pcd, *agex::loadFrame (png).cloud), 0);
+
+  agex::apps::DetectorChoice choice;
+  choice.model = AGEX_SOURCE_DIR "/data/models/agex_bonn.yml";
+  const agex::apps::LoadedDetector loaded = agex::apps::loadDetector (choice, agex::DetectorKind::Fused);
+  agex::apps::DetectFlags flags;  // the depth images seen through another lens than the PCD's
+  flags.frame_options.intrinsics.fx = flags.frame_options.intrinsics.fy = 400.0;
+  flags.frame_options.intrinsics_width = flags.frame_options.intrinsics_height = 0;
+  auto detections = [&] (agex::apps::DetectorPool &pool, const std::string &path) {
+    return agex::apps::detectFrame ({path, path}, pool, flags)["detections"];
+  };
+  agex::apps::DetectorPool kept (loaded);
+  const nlohmann::json first = detections (kept, other);
+  const nlohmann::json from_png = detections (kept, png);
+  const nlohmann::json from_pcd = detections (kept, pcd);
+  EXPECT_EQ (kept.size (), 1u);
+  for (const auto &[path, seen] : {std::pair<std::string, nlohmann::json>{png, from_png}, {pcd, from_pcd}, {other, first}})
+  {
+    agex::apps::DetectorPool fresh (loaded);
+    EXPECT_EQ (detections (fresh, path), seen) << path;
+  }
+  EXPECT_FALSE (from_png.empty ());
+  EXPECT_FALSE (from_pcd.empty ());
+
+  // Two threads at work at once hold two detectors.
+  std::atomic<int> inside{0};
+  auto hold = [&] {
+    kept.with ([&] (agex::BodyPartDetector<pcl::PointXYZ> &) {
+      ++inside;
+      for (int spin = 0; inside < 2 && spin < 2000; ++spin)
+        std::this_thread::sleep_for (std::chrono::milliseconds (1));
+      return 0;
+    });
+  };
+  std::thread a (hold), b (hold);
+  a.join ();
+  b.join ();
+  EXPECT_EQ (inside, 2);
+  EXPECT_EQ (kept.size (), 2u);
 }
 }  // namespace

@@ -1,6 +1,7 @@
 // agex for Python (module agex._agex; doc/python.md): the detector, frames, AGEX interest
 // points. Frames are processed without the GIL, so that a Python thread pool scales; each
-// detect () call runs its own agex::BodyPartDetector over the shared, read-only model.
+// detect () call runs an agex::BodyPartDetector no other call is using, over the shared,
+// read-only model (kept from call to call with its buffers).
 
 #include <agex/classification/body_part_forest.h>
 #include <agex/classification/model_error.h>
@@ -342,22 +343,28 @@ public:
                      bool return_intermediate)
   {
     const std::shared_ptr<PyFrame> frame = frameOf (depth, fx, fy, cx, cy, depth_scale);
-    auto detector = std::make_shared<agex::BodyPartDetector<pcl::PointXYZ>> ();
+    std::shared_ptr<agex::BodyPartDetector<pcl::PointXYZ>> detector;
     std::vector<agex::BodyPartDetection> detections;
     {
       py::gil_scoped_release release;
+      detector = takeDetector ();
       detector->setModel (model_);
       detector->setForest (forest_);
       detector->setMode (mode_);
       detector->setForestStride (forest_stride_);
-      if (frame->has_intrinsics ())  // a PCD carries no intrinsics: the detector estimates them
+      // A PCD carries no intrinsics: the detector estimates them (0), whatever the last frame had.
+      if (frame->has_intrinsics ())
         detector->setFocalLength (static_cast<float> (frame->frame.intrinsics.fx),
                                   static_cast<float> (frame->frame.intrinsics.fy));
+      else
+        detector->setFocalLength (0.f, 0.f);
       detector->setInputCloud (frame->frame.cloud);
       detector->compute (detections);
     }
     {
       std::lock_guard<std::mutex> lock (mutex_);
+      if (last_)
+        idle_.push_back (std::move (last_));  // reused once intermediate () no longer reads it
       last_ = detector;
     }
     py::list list;
@@ -366,6 +373,22 @@ public:
     if (return_intermediate)
       return py::make_tuple (list, intermediateOf (*detector));
     return std::move (list);
+  }
+
+  /** A C++ detector for one detect () call: an idle one that nothing else holds (kept from
+    * earlier frames with its buffers, agex::DepthPipeline), else a new one. The last call's
+    * detector is not idle: intermediate () reads it. */
+  std::shared_ptr<agex::BodyPartDetector<pcl::PointXYZ>> takeDetector ()
+  {
+    std::lock_guard<std::mutex> lock (mutex_);
+    for (auto it = idle_.begin (); it != idle_.end (); ++it)
+      if (it->use_count () == 1)
+      {
+        auto detector = std::move (*it);
+        idle_.erase (it);
+        return detector;
+      }
+    return std::make_shared<agex::BodyPartDetector<pcl::PointXYZ>> ();
   }
 
   py::dict intermediate () const
@@ -456,7 +479,9 @@ private:
   int forest_stride_ = 1;
   std::string model_path_, forest_path_;
   mutable std::mutex mutex_;
-  std::shared_ptr<const agex::BodyPartDetector<pcl::PointXYZ>> last_;
+  std::shared_ptr<agex::BodyPartDetector<pcl::PointXYZ>> last_;
+  // Detectors of earlier calls, at most one per call that ran at the same time as others.
+  std::vector<std::shared_ptr<agex::BodyPartDetector<pcl::PointXYZ>>> idle_;
 };
 
 // --- AGEX interest points -------------------------------------------------------------

@@ -242,12 +242,38 @@ def test_a_thread_pool_gives_what_a_serial_loop_gives(grey):
     serial = [shared.detect(f, **KINECT, depth_scale=BONN_SCALE) for f in frames]
     assert len({json.dumps(s) for s in serial}) == len(frames)  # the frames really differ
     with ThreadPoolExecutor(max_workers=4) as pool:
-        # One detector shared by every thread (each call runs its own C++ detector) ...
+        # One detector shared by every thread (each call a C++ detector no other call uses) ...
         pooled = list(pool.map(lambda f: shared.detect(f, **KINECT, depth_scale=BONN_SCALE), frames))
         # ... and one per call.
         fresh = list(pool.map(lambda f: agex.BodyPartDetector().detect(f, **KINECT, depth_scale=BONN_SCALE), frames))
     assert pooled == serial
     assert fresh == serial
+
+
+def write_pcd(path, points):
+    """An organized ASCII PCD of an H x W x 3 array of points (NaN where none)."""
+    h, w, _ = points.shape
+    header = (f"# .PCD v0.7\nVERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n"
+              f"WIDTH {w}\nHEIGHT {h}\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS {w * h}\nDATA ascii\n")
+    rows = "\n".join(" ".join("nan" if np.isnan(v) else repr(float(v)) for v in p) for p in points.reshape(-1, 3))
+    path.write_text(header + rows + "\n")
+
+
+def test_a_kept_detector_gives_what_a_new_one_gives(grey, tmp_path):
+    # One detector over frames of different cameras: a PCD (no intrinsics: estimated) after an
+    # array seen through another lens gets the estimate again, not the last frame's.
+    pcd = tmp_path / "frame.pcd"
+    write_pcd(pcd, np.asarray(agex.load_frame(FRAME).points))
+    kept = agex.BodyPartDetector()
+    # The last call's C++ detector stays with intermediate (): calls take turns between two, so
+    # two array frames first leave both having seen the other lens.
+    through_another_lens = kept.detect(grey, fx=400.0, fy=400.0, cx=319.5, cy=239.5, depth_scale=BONN_SCALE)
+    assert kept.detect(grey, fx=400.0, fy=400.0, cx=319.5, cy=239.5, depth_scale=BONN_SCALE) == through_another_lens
+    from_pcd = kept.detect(agex.load_frame(str(pcd)))
+    again = kept.detect(grey, fx=400.0, fy=400.0, cx=319.5, cy=239.5, depth_scale=BONN_SCALE)
+    assert from_pcd == agex.BodyPartDetector().detect(agex.load_frame(str(pcd)))
+    assert again == through_another_lens
+    assert from_pcd and from_pcd != through_another_lens
 
 
 def test_bundled_data():

@@ -944,7 +944,9 @@ allIndices (const Cloud &cloud)
 TEST (ReusedFilters, GiveWhatNewOnesGiveFrameAfterFrame)
 {
   Mixed mixed;
+  mixed.setNegative (true);
   Spur spurs;
+  spurs.setIterations (3);
   Segmentation segmentation;
   int mixed_found = 0, spurs_found = 0, meshes_found = 0;
   for (unsigned seed = 1; seed <= 12; ++seed)
@@ -956,30 +958,24 @@ TEST (ReusedFilters, GiveWhatNewOnesGiveFrameAfterFrame)
     const pcl::IndicesPtr some = limited ? someIndices (*cloud, seed, seed % 5 == 0) : allIndices (*cloud);
     const std::string frame = "frame " + std::to_string (seed);
 
-    auto run_mixed = [&] (Mixed &filter) {
+    // The kept filter against a new one set up the same way.
+    auto run = [&] (auto &filter) {
       filter.setInputCloud (cloud);
       filter.setIndices (some);
-      filter.setNegative (true);
       pcl::Indices out;
       filter.filter (out);
       return out;
     };
     Mixed fresh_mixed;
-    const pcl::Indices mixed_expected = run_mixed (fresh_mixed);
-    EXPECT_EQ (run_mixed (mixed), mixed_expected) << frame;
+    fresh_mixed.setNegative (true);
+    const pcl::Indices mixed_expected = run (fresh_mixed);
+    EXPECT_EQ (run (mixed), mixed_expected) << frame;
     mixed_found += static_cast<int> (mixed_expected.size ());
 
-    auto run_spurs = [&] (Spur &filter) {
-      filter.setInputCloud (cloud);
-      filter.setIndices (some);
-      filter.setIterations (3);
-      pcl::Indices out;
-      filter.filter (out);
-      return out;
-    };
     Spur fresh_spurs;
-    const pcl::Indices spurs_expected = run_spurs (fresh_spurs);
-    EXPECT_EQ (run_spurs (spurs), spurs_expected) << frame;
+    fresh_spurs.setIterations (3);
+    const pcl::Indices spurs_expected = run (fresh_spurs);
+    EXPECT_EQ (run (spurs), spurs_expected) << frame;
     spurs_found += static_cast<int> (spurs_expected.size ());
 
     auto run_segmentation = [&] (Segmentation &segmenter) {

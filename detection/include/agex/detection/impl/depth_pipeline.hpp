@@ -15,9 +15,10 @@
 
 #include <algorithm>
 #include <chrono>
-#include <type_traits>
 #include <cmath>
+#include <iterator>
 #include <limits>
+#include <type_traits>
 
 namespace agex
 {
@@ -58,16 +59,10 @@ removeSortedSubset (pcl::Indices &sorted, const pcl::Indices &removed)
 {
   if (removed.empty ())
     return;
-  std::size_t out = 0, r = 0;
-  for (std::size_t i = 0; i < sorted.size (); ++i)
-  {
-    while (r < removed.size () && removed[r] < sorted[i])
-      ++r;
-    if (r < removed.size () && removed[r] == sorted[i])
-      continue;
-    sorted[out++] = sorted[i];
-  }
-  sorted.resize (out);
+  pcl::Indices kept;
+  kept.reserve (sorted.size () - std::min (sorted.size (), removed.size ()));
+  std::set_difference (sorted.begin (), sorted.end (), removed.begin (), removed.end (), std::back_inserter (kept));
+  sorted.swap (kept);
 }
 }  // namespace detail
 }  // namespace agex

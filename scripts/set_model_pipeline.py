@@ -40,7 +40,8 @@ def main(argv):
         sys.exit(f"set_model_pipeline: {src}: no pipeline settings")
     for pair in pairs:
         key, _, value = pair.partition('=')
-        if key not in meta['pipeline'] and key != 'depth_step_growth':
+        # Settings added since older models were written: absent there, allowed here.
+        if key not in meta['pipeline'] and key not in ('depth_step_growth', 'hidden_people'):
             sys.exit(f"set_model_pipeline: unknown pipeline setting '{key}' (doc/pipeline.md)")
         meta['pipeline'][key] = json.loads(value)
     text = json.dumps(meta, separators=(',', ':'), sort_keys=True, ensure_ascii=True)

@@ -89,6 +89,7 @@ DepthPipelineParams::toJson () const
           {"mixed_min_jump", mixed_min_jump},
           {"mixed_max_veil_angle_deg", mixed_max_veil_angle_deg},
           {"isolate_people", isolate_people},
+          {"hidden_people", hidden_people},
           {"use_crop_box", use_crop_box},
           {"crop_min", vec (crop_min)},
           {"crop_max", vec (crop_max)},
@@ -155,6 +156,7 @@ DepthPipelineParams::fromJson (const nlohmann::json &doc, const std::string &sou
   q.mixed_max_veil_angle_deg = static_cast<float> (number ("mixed_max_veil_angle_deg", -kWide, kWide));
   // Models of agex 0.1 know no people: their crop box isolated the person.
   q.isolate_people = doc.contains ("isolate_people") ? boolean ("isolate_people") : false;
+  q.hidden_people = doc.contains ("hidden_people") ? boolean ("hidden_people") : false;
   q.use_crop_box = doc.contains ("use_crop_box") ? boolean ("use_crop_box") : true;
   q.crop_min = vector ("crop_min");
   q.crop_max = vector ("crop_max");

@@ -101,6 +101,22 @@ TEST (DetectorSettings, KindStoredInTheSettingsAndChecked)
   EXPECT_THROW (agex::DetectorSettings::fromJson (doc, "m.yml"), std::invalid_argument);
 }
 
+TEST (DetectorSettings, HiddenPeopleStoredAndOffInOlderModels)
+{
+  agex::DetectorSettings settings;
+  EXPECT_TRUE (settings.pipeline.hidden_people);
+  settings.pipeline.hidden_people = false;
+  nlohmann::json doc = settings.toJson ();
+  EXPECT_FALSE (agex::DetectorSettings::fromJson (doc, "m.yml").pipeline.hidden_people);
+  doc["pipeline"]["hidden_people"] = true;
+  EXPECT_TRUE (agex::DetectorSettings::fromJson (doc, "m.yml").pipeline.hidden_people);
+  // Models written before the setting keep the persons they found then.
+  doc["pipeline"].erase ("hidden_people");
+  EXPECT_FALSE (agex::DetectorSettings::fromJson (doc, "m.yml").pipeline.hidden_people);
+  doc["pipeline"]["hidden_people"] = "yes";
+  EXPECT_THROW (agex::DetectorSettings::fromJson (doc, "m.yml"), std::invalid_argument);
+}
+
 /** The message of what f throws (empty if it does not). */
 template <typename F>
 std::string

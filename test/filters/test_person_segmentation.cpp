@@ -468,6 +468,68 @@ TEST (PersonSegmentation, PersonWhoseHipsAreHiddenIsOnePerson)
   EXPECT_GT (pointsAbove (*cloud, found.persons[0], 1.3), 2000);  // upper body
 }
 
+TEST (PersonSegmentation, PersonSeenOnlyRoundANearerOneIsAHiddenPerson)
+{
+  // Someone 1-1.5 m behind another and a little to the side: only their head and a strip of
+  // the body show beside the nearer one, in pieces that are nobody by the rules of whole
+  // persons. Kept as one hidden person; without the rule, only the nearer one is found.
+  for (const double z : {3.0, 3.5})
+  {
+    Scene scene;
+    scene.addBox (-4.0, 4.0, 0.0, 2.6, 5.5, 5.6);
+    scene.addPerson (0.0, 2.0);
+    scene.addPerson (0.3, z);
+    const DepthCamera cam;
+    const Cloud::Ptr cloud = scene.render (cam);
+    const Found found = segment (cloud);
+    ASSERT_EQ (found.persons.size (), 2u) << "at " << z << " m";
+    EXPECT_FALSE (found.infos[0].hidden);
+    EXPECT_TRUE (found.infos[1].hidden);
+    EXPECT_NEAR (found.infos[1].distance, z, 0.15);
+    // The hidden person's pixels are what shows of the one behind.
+    const std::vector<unsigned char> behind = personMask (0.3, z, cam);
+    const std::vector<unsigned char> front = personMask (0.0, 2.0, cam);
+    std::vector<unsigned char> visible (behind.size ());
+    for (std::size_t i = 0; i < behind.size (); ++i)
+      visible[i] = behind[i] && !front[i];
+    double recall, precision;
+    overlap (found.persons[1], visible, recall, precision);
+    EXPECT_GT (precision, 0.95);
+    EXPECT_GT (recall, 0.7);
+
+    Segmentation off;
+    off.setHiddenPersons (false, off.getHiddenPersonMinArea ());
+    const Found without = segment (cloud, &off);
+    ASSERT_EQ (without.persons.size (), 1u);
+    EXPECT_FALSE (without.infos[0].hidden);
+  }
+}
+
+TEST (PersonSegmentation, BoardAndLowCabinetBehindPeopleAreNoHiddenPerson)
+{
+  // A board seen in the gap between two people (hemmed in by them: the background rule) and
+  // a low cabinet beside and behind a person (nothing as high as a person's top: the top
+  // rule) are no one, though each is a piece behind a person.
+  Scene board;
+  board.addBox (-4.0, 4.0, 0.0, 2.6, 5.5, 5.6);
+  board.addPerson (-0.4, 2.0);
+  board.addPerson (0.4, 2.0);
+  board.addBox (-0.25, 0.25, 0.3, 1.6, 3.5, 3.52);
+  const DepthCamera cam;
+  const Found two = segment (board.render (cam));
+  ASSERT_EQ (two.persons.size (), 2u);
+  for (const auto &info : two.infos)
+    EXPECT_FALSE (info.hidden);
+
+  Scene cabinet;
+  cabinet.addBox (-4.0, 4.0, 0.0, 2.6, 5.5, 5.6);
+  cabinet.addPerson (0.0, 2.0);
+  cabinet.addBox (0.3, 0.8, 0.0, 0.5, 3.2, 3.5);
+  const Found one = segment (cabinet.render (cam));
+  ASSERT_EQ (one.persons.size (), 1u);
+  EXPECT_FALSE (one.infos[0].hidden);
+}
+
 TEST (PersonSegmentation, WallDeskChairAndCabinetAreNoPerson)
 {
   Scene scene;

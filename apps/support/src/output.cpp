@@ -301,7 +301,8 @@ personsJson (const std::vector<PersonInfo> &persons)
                     {"distance", p.distance},
                     {"height", p.top},
                     {"on_floor", p.on_floor},
-                    {"too_far", p.too_far}});
+                    {"too_far", p.too_far},
+                    {"hidden", p.hidden}});
   }
   return doc;
 }

@@ -130,6 +130,8 @@ pipelineOptionsDescription (DepthPipelineParams &p, std::vector<std::string> &st
      "largest angle between a jump and the viewing ray, degrees")
     ("no-person-isolation", po::bool_switch ()->notifier ([&p] (bool off) { p.isolate_people = !off; }),
      "no agex::PersonSegmentation: the crop box alone isolates the person")
+    ("no-hidden-people", po::bool_switch ()->notifier ([&p] (bool off) { p.hidden_people = p.hidden_people && !off; }),
+     "no persons seen only in pieces behind a nearer person")
     ("crop-box", po::bool_switch ()->notifier ([&p] (bool on) { p.use_crop_box = p.use_crop_box || on; }),
      "keep only the points inside --crop-min/--crop-max (also with people)")
     ("crop-min", po::value (&storage[0])->default_value (storage[0]), "bounding box minimum x,y,z, metres")

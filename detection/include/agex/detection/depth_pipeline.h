@@ -40,6 +40,9 @@ struct DepthPipelineParams
   // People (agex::PersonSegmentation): the person pixels are what the later stages see, and
   // its floor is the floor. Off: the crop box alone isolates the person (models of agex 0.1).
   bool isolate_people = true;
+  // With isolate_people: persons seen only in pieces behind a nearer person are persons too
+  // (agex::PersonSegmentation::setHiddenPersons). Models trained before this setting: off.
+  bool hidden_people = true;
   // Bounding box in the camera frame, metres (pcl::CropBox); off by default (it fits one room).
   bool use_crop_box = false;
   Eigen::Vector3f crop_min = Eigen::Vector3f (-0.75f, -1.5f, 1.3f);

@@ -41,6 +41,7 @@ struct PersonInfo
   bool on_floor = false;    ///< judged against a floor plane (false: by the floor-free rule)
   bool split = false;       ///< cut out of a cluster that held several people
   int pieces = 1;           ///< clusters (pieces split off by depth gaps) merged into it
+  bool hidden = false;      ///< seen only in pieces behind a nearer person (not judged by the person rules)
   unsigned border = 0;      ///< Border bits
 };
 
@@ -110,6 +111,15 @@ enum class PersonVerdict;
   *    a depth gap, a leg seen below a chair) joins the nearest person, within the merge
   *    reach on the floor, that it touches in the image or lies in front of or behind
   *    (overlapping directions from the camera), unless it reaches above the person's top.
+  *    **Hidden persons** (with a floor; setHiddenPersons): the pieces left over that are
+  *    nobody alone (too small, too low or floating), at most half the maximum width and not
+  *    above the maximum top, and that touch a person in the image while lying behind it
+  *    (their mean depth beyond the person's by more than the merge distance), are a person
+  *    seen round a nearer one: pieces within the merge reach of each other on the floor
+  *    together, kept when together they have the hidden person's minimum area, reach the
+  *    minimum top and pass the background rule (a panel seen between two people, hemmed in
+  *    by them, is no one). The other person rules cannot judge so little of a body;
+  *    PersonInfo::hidden marks such persons.
   * 7. **Without a floor** (none given, none found: close-range upper bodies): heights are
   *    taken along the up axis from an arbitrary origin; a cluster is a person when it has
   *    the minimum area, spans at least the fallback's minimum upright extent and at most
@@ -295,6 +305,15 @@ public:
   }
   float getHandArea () const { return hand_area_; }
   float getMinHandPixels () const { return min_hand_pixels_; }
+  /** Whether to keep persons seen only in pieces behind a nearer person (default true), and
+    * the least visible area of such a person (default 0.06 m^2: a head and shoulders). */
+  void setHiddenPersons (bool find, float min_area)
+  {
+    find_hidden_ = find;
+    hidden_min_area_ = min_area;
+  }
+  bool getFindHiddenPersons () const { return find_hidden_; }
+  float getHiddenPersonMinArea () const { return hidden_min_area_; }
 
   /** \brief Finds the persons. Empty on error. */
   void segment (std::vector<pcl::PointIndices> &persons);
@@ -337,6 +356,8 @@ private:
                     std::vector<detail::PersonCandidate> &leftovers) const;
   int nearestPerson (const std::vector<detail::PersonPartStats> &own, const detail::PersonPartStats &piece,
                      const std::vector<unsigned char> &touches) const;
+  void findHiddenPersons (detail::PersonScan &scan, std::vector<detail::PersonCandidate> &people,
+                          const std::vector<detail::PersonCandidate> &leftovers) const;
   void takePixels (const detail::PersonScan &scan, const std::vector<detail::PersonCandidate> &people,
                    pcl::PointCloud<pcl::Label> &labels, std::vector<detail::PersonPixels> &pixels) const;
   void personPixels (const detail::PersonScan &scan, const std::vector<detail::PersonPart> &parts, int k,
@@ -385,6 +406,8 @@ private:
   float merge_reach_ = 0.6f, merge_distance_ = 0.3f;
   float fallback_min_extent_ = 0.3f, min_background_fraction_ = 0.5f;
   float hand_area_ = 0.01f, min_hand_pixels_ = 50.f;
+  bool find_hidden_ = true;
+  float hidden_min_area_ = 0.06f;
   std::vector<PersonInfo> infos_;
   pcl::PointCloud<pcl::Label> scratch_labels_;
 };

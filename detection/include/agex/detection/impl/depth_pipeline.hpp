@@ -140,6 +140,7 @@ agex::DepthPipeline<PointT>::compute (DepthPipelineResult &result)
     people_.setUpAxis (params.up);
     people_.setFloorMaxTilt (params.floor_max_tilt_deg);
     people_.setFloorDistance (params.floor_distance);
+    people_.setHiddenPersons (params.hidden_people, people_.getHiddenPersonMinArea ());
     people_.segment (person_labels_, result.persons);
     result.person_info = people_.getPersons ();
     if (people_.getFloorFound ())

@@ -80,6 +80,7 @@ struct PersonCandidate
   PersonPartStats stats;
   PersonVerdict verdict = PersonVerdict::kEmpty;
   bool split = false;
+  bool hidden = false;
   int pieces = 1;
 };
 
@@ -309,7 +310,8 @@ agex::PersonSegmentation<PointT>::validParameters () const
          positive (min_head_distance_) && positive (min_valley_depth_) && max_narrowing_ > 0.f &&
          max_narrowing_ <= 1.f && non_negative (merge_reach_) &&
          non_negative (merge_distance_) && non_negative (fallback_min_extent_) && min_background_fraction_ >= 0.f &&
-         min_background_fraction_ <= 1.f && positive (hand_area_) && non_negative (min_hand_pixels_);
+         min_background_fraction_ <= 1.f && positive (hand_area_) && non_negative (min_hand_pixels_) &&
+         positive (hidden_min_area_);
 }
 
 template <typename PointT> std::vector<bool>
@@ -413,6 +415,7 @@ agex::PersonSegmentation<PointT>::segment (pcl::PointCloud<pcl::Label> &labels, 
   mergePersonLike (scan, people);
   mergeHiddenPieces (scan, people, leftovers);
   mergePieces (scan, people, leftovers);
+  findHiddenPersons (scan, people, leftovers);
   std::vector<detail::PersonPixels> pixels;
   takePixels (scan, people, labels, pixels);
   describePersons (scan, people, pixels, labels, persons);
@@ -1105,14 +1108,22 @@ agex::PersonSegmentation<PointT>::mergePieces (detail::PersonScan &scan, std::ve
   std::vector<unsigned char> touches (people.size ());
   bool any_merged = false;
   std::vector<unsigned char> merged_into (people.size (), 0);
-  for (auto &piece : leftovers)
+  std::size_t kept = 0;  // the pieces no one took stay leftovers
+  for (std::size_t i = 0; i < leftovers.size (); ++i)
   {
-    if (piece.verdict == detail::PersonVerdict::kTooTall || piece.stats.width > 0.5f * max_width_)
-      continue;  // walls, shelves, desks
-    detail::touchedPersons (scan, piece.parts, touches);
-    const int best = nearestPerson (own, piece.stats, touches);
+    detail::PersonCandidate &piece = leftovers[i];
+    int best = -1;
+    if (piece.verdict != detail::PersonVerdict::kTooTall && piece.stats.width <= 0.5f * max_width_)  // not walls, shelves, desks
+    {
+      detail::touchedPersons (scan, piece.parts, touches);
+      best = nearestPerson (own, piece.stats, touches);
+    }
     if (best < 0)
+    {
+      if (kept++ != i)  // never moved onto itself, which would empty it
+        leftovers[kept - 1] = std::move (piece);
       continue;
+    }
     detail::PersonCandidate &person = people[best];
     person.parts.insert (person.parts.end (), piece.parts.begin (), piece.parts.end ());
     person.pieces += piece.pieces;
@@ -1120,6 +1131,7 @@ agex::PersonSegmentation<PointT>::mergePieces (detail::PersonScan &scan, std::ve
     merged_into[best] = 1;
     any_merged = true;
   }
+  leftovers.resize (kept);
   if (any_merged)
     for (std::size_t k = 0; k < people.size (); ++k)
       if (merged_into[k])
@@ -1156,6 +1168,62 @@ agex::PersonSegmentation<PointT>::nearestPerson (const std::vector<detail::Perso
     }
   }
   return best;
+}
+
+/** 6. Hidden persons: pieces left over that are nobody alone and lie behind a person they
+  * touch in the image are a person seen round that nearer one (doc/pipeline.md, "People").
+  * Largest piece first; a piece joins the first hidden person within the merge reach of it
+  * on the floor. Claims the kept ones' cells in scan.cell_person. */
+template <typename PointT> void
+agex::PersonSegmentation<PointT>::findHiddenPersons (detail::PersonScan &scan,
+                                                     std::vector<detail::PersonCandidate> &people,
+                                                     const std::vector<detail::PersonCandidate> &leftovers) const
+{
+  using detail::PersonVerdict;
+  if (!find_hidden_ || !scan.with_floor || people.empty ())
+    return;  // without a floor no heights tell a fragment of a body from anything else
+  const std::size_t seen = people.size ();
+  std::vector<unsigned char> touches (seen);
+  std::vector<detail::PersonCandidate> hidden;
+  for (const auto &piece : leftovers)  // largest first (mergePieces)
+  {
+    const detail::PersonPartStats &p = piece.stats;
+    const bool part_of_a_body = piece.verdict == PersonVerdict::kTooSmall || piece.verdict == PersonVerdict::kTooLow ||
+                                piece.verdict == PersonVerdict::kFloating;
+    if (!part_of_a_body || !p.cells || p.width > 0.5f * max_width_ || p.top > max_top_)
+      continue;
+    detail::touchedPersons (scan, piece.parts, touches);
+    bool behind = false;
+    for (std::size_t k = 0; k < seen && !behind; ++k)
+      behind = touches[k] && people[k].stats.zMean () + merge_distance_ < p.zMean ();
+    if (!behind)
+      continue;
+    auto joins = std::find_if (hidden.begin (), hidden.end (), [&] (const detail::PersonCandidate &h) {
+      return detail::groundDistance (h.stats, p) <= merge_reach_;
+    });
+    if (joins == hidden.end ())
+    {
+      hidden.push_back (piece);
+      hidden.back ().hidden = true;
+      continue;
+    }
+    joins->parts.insert (joins->parts.end (), piece.parts.begin (), piece.parts.end ());
+    joins->pieces += piece.pieces;
+    measure (scan, joins->parts, joins->stats);
+  }
+  // What is kept: enough of a body, something of it as high as a person's top, and the
+  // background rule of whole persons (a panel seen between two people, hemmed in by them,
+  // is no one).
+  for (auto &h : hidden)
+  {
+    if (h.stats.area < hidden_min_area_ || h.stats.top < min_top_ || h.stats.width > max_width_)
+      continue;
+    outline (scan, h.parts, h.stats);
+    if (h.stats.outline_background < min_background_fraction_ * h.stats.outline)
+      continue;
+    detail::claimPersonCells (scan, h.parts, static_cast<int> (people.size ()));
+    people.push_back (std::move (h));
+  }
 }
 
 /** 8. Full resolution. A pixel in the block of one of the person's cells, or of a free
@@ -1301,6 +1369,7 @@ agex::PersonSegmentation<PointT>::personInfo (const detail::PersonScan &scan, co
   info.on_floor = scan.with_floor;
   info.split = person.split;
   info.pieces = person.pieces;
+  info.hidden = person.hidden;
   info.border = s.border;
   return info;
 }

@@ -1,9 +1,9 @@
 #!/usr/bin/env python3
 """Which labelled persons the detector loses, on an agex dataset with person images
 (agex_synth --people N): per person with a visible tip at 0.8-4 m, whether any candidate of
-the detector lies on its pixels (else person isolation lost it), whether any candidate lies
-within 10 cm of a visible tip, and whether a detection of the tip's class with confidence
->= 0.5 does.
+the detector lies on its pixels (else person isolation lost it, or the cleaning stages removed
+what it kept), whether any candidate lies within 10 cm of a visible tip, and whether a
+detection of the tip's class with confidence >= 0.5 does.
 
   agex_detect DATASET --json DETECTIONS.jsonl [--model ...]
   scripts/person_losses.py DATASET DETECTIONS.jsonl
@@ -60,7 +60,7 @@ def main(dataset, detections_path):
     near = [p for p in persons if 0.8 <= p["distance"] < 4.0]
     lost = [p for p in near if p["on_mask"] == 0]
     print(f"persons with a visible tip at 0.8-4 m: {len(near)}")
-    print(f"  no candidate on their pixels (isolation lost them): {len(lost)}")
+    print(f"  no candidate on their pixels (isolation or the cleaning lost them): {len(lost)}")
     print(f"  candidates on them, none within {RADIUS} m of a tip: "
           f"{sum(p['on_mask'] > 0 and not p['covered'] for p in near)}")
     print(f"  a candidate within {RADIUS} m of a tip: {sum(p['covered'] for p in near)}")

@@ -229,6 +229,17 @@ claimPersonCells (PersonScan &scan, const std::vector<PersonPart> &parts, int k)
   forEachPartCell (scan, parts, [&] (const PersonPart &, int c, const PersonGridCell &) { scan.cell_person[c] = k; });
 }
 
+/** Drops the candidates marked used, the rest in their order. */
+inline void
+dropUsed (std::vector<PersonCandidate> &candidates, const std::vector<unsigned char> &used)
+{
+  std::size_t kept = 0;
+  for (std::size_t i = 0; i < candidates.size (); ++i)
+    if (!used[i] && kept++ != i)  // never moved onto itself, which would empty it
+      candidates[kept - 1] = std::move (candidates[i]);
+  candidates.resize (kept);
+}
+
 /** Marks the persons whose cells touch the parts in the image. */
 inline void
 touchedPersons (const PersonScan &scan, const std::vector<PersonPart> &parts, std::vector<unsigned char> &touches)
@@ -1079,11 +1090,7 @@ agex::PersonSegmentation<PointT>::mergeHiddenPieces (const detail::PersonScan &s
       break;
     }
   }
-  std::size_t kept = 0;
-  for (std::size_t i = 0; i < leftovers.size (); ++i)
-    if (!used[i] && kept++ != i)  // never moved onto itself, which would empty it
-      leftovers[kept - 1] = std::move (leftovers[i]);
-  leftovers.resize (kept);
+  detail::dropUsed (leftovers, used);
 }
 
 /** 6. Merge, then: small pieces, largest first, join the nearest person they touch in the
@@ -1108,30 +1115,25 @@ agex::PersonSegmentation<PointT>::mergePieces (detail::PersonScan &scan, std::ve
   std::vector<unsigned char> touches (people.size ());
   bool any_merged = false;
   std::vector<unsigned char> merged_into (people.size (), 0);
-  std::size_t kept = 0;  // the pieces no one took stay leftovers
+  std::vector<unsigned char> used (leftovers.size (), 0);  // the pieces no one took stay leftovers
   for (std::size_t i = 0; i < leftovers.size (); ++i)
   {
-    detail::PersonCandidate &piece = leftovers[i];
-    int best = -1;
-    if (piece.verdict != detail::PersonVerdict::kTooTall && piece.stats.width <= 0.5f * max_width_)  // not walls, shelves, desks
-    {
-      detail::touchedPersons (scan, piece.parts, touches);
-      best = nearestPerson (own, piece.stats, touches);
-    }
+    const detail::PersonCandidate &piece = leftovers[i];
+    if (piece.verdict == detail::PersonVerdict::kTooTall || piece.stats.width > 0.5f * max_width_)
+      continue;  // walls, shelves, desks
+    detail::touchedPersons (scan, piece.parts, touches);
+    const int best = nearestPerson (own, piece.stats, touches);
     if (best < 0)
-    {
-      if (kept++ != i)  // never moved onto itself, which would empty it
-        leftovers[kept - 1] = std::move (piece);
       continue;
-    }
     detail::PersonCandidate &person = people[best];
     person.parts.insert (person.parts.end (), piece.parts.begin (), piece.parts.end ());
     person.pieces += piece.pieces;
     detail::claimPersonCells (scan, piece.parts, best);
     merged_into[best] = 1;
     any_merged = true;
+    used[i] = 1;
   }
-  leftovers.resize (kept);
+  detail::dropUsed (leftovers, used);
   if (any_merged)
     for (std::size_t k = 0; k < people.size (); ++k)
       if (merged_into[k])

@@ -258,6 +258,10 @@ check "--device kinect2" 1 "--device takes openni2, openni2:URI .* or replay:PAT
 check "--device replay: of a missing directory" 1 "missing: no such file or directory" $D --device replay:in/missing
 check "--device replay:in/batch --fps 0" 1 "--fps must lie in \\(0, 10000\\]" $D --device replay:in/batch --fps 0
 check "agex_eval coverage under --shard" 1 "only agex_eval detect shares its frames" $E coverage --dataset in/dataset --shard 0/2
+check "agex_eval detect with a pipeline flag" 1 "--spur-iterations applies to agex_eval coverage, not to agex_eval 'detect'" \
+  $E detect --dataset in/dataset --spur-iterations 0 --json out/d.json
+check "agex_eval compare with a detect flag" 1 "--forest applies to agex_eval detect or parts" \
+  $E compare --dataset in/dataset --forest in/dataset
 
 # Parsers that would recurse without bound, and inputs that would block.
 cp "$SRC/test/fuzz/regressions/model/nested_100000_deep_overflows_opencv_stack.yml" in/nested_model.yml

@@ -63,6 +63,13 @@ bool
 parseCommandLine (int argc, char **argv, const po::options_description &options,
                   const po::positional_options_description &positional)
 {
+  return parseCommandLine (argc, argv, options, positional, nullptr);
+}
+
+bool
+parseCommandLine (int argc, char **argv, const po::options_description &options,
+                  const po::positional_options_description &positional, std::vector<std::string> *given)
+{
   po::variables_map vm;
   po::store (po::command_line_parser (argc, argv).options (options).positional (positional).run (), vm);
   if (vm.count ("help"))
@@ -71,6 +78,13 @@ parseCommandLine (int argc, char **argv, const po::options_description &options,
     return false;
   }
   po::notify (vm);
+  if (given)
+  {
+    given->clear ();
+    for (const auto &[name, value] : vm)
+      if (!value.defaulted ())
+        given->push_back (name);
+  }
   return true;
 }
 

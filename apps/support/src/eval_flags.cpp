@@ -8,6 +8,8 @@
 #include <boost/program_options.hpp>
 
 #include <filesystem>
+#include <map>
+#include <set>
 #include <stdexcept>
 
 namespace po = boost::program_options;
@@ -65,12 +67,44 @@ parseEvalFlags (int argc, char **argv, bool distributed, EvalFlags &flags)
   po::positional_options_description positional;
   positional.add ("mode", 1);
 
-  if (!parseCommandLine (argc, argv, all, positional))
+  std::vector<std::string> given;
+  if (!parseCommandLine (argc, argv, all, positional, &given))
     return false;
   if ((distributed || !flags.shard.empty () || !flags.merge_parts.empty ()) && flags.mode != "detect")
     throw std::runtime_error ("only agex_eval detect shares its frames (mpirun, --shard, --merge)");
   if (!flags.merge_parts.empty ())
     return true;
+  if (flags.mode != "coverage" && flags.mode != "detect" && flags.mode != "compare" && flags.mode != "parts")
+    throw std::runtime_error ("unknown mode '" + flags.mode + "' (expected coverage, detect, compare or parts)");
+  // A flag of another mode would be ignored without a word (agex_eval detect takes its
+  // pipeline from the model, not from --spur-iterations): refused instead, naming the modes.
+  std::map<std::string, std::set<std::string>> modes_of = {
+      {"k", {"coverage"}},          {"details", {"coverage"}},      {"plot", {"coverage"}},
+      {"plots", {"detect", "compare"}}, {"overlay-dir", {"parts"}}, {"model-agex", {"compare"}},
+      {"model-sw", {"compare"}},    {"model-fused", {"compare"}},   {"min-iou", {"compare"}},
+      {"window-stride", {"compare"}}, {"window-scales", {"compare"}}};
+  for (const auto &option : pipeline.options ())
+    modes_of[option->long_name ()] = {"coverage"};
+  const po::options_description weak = weakLabelOptions (flags.weak),
+                                 detector = detectorOptionsDescription (flags.detector, kBundledModelFile);
+  for (const auto &option : weak.options ())
+    modes_of[option->long_name ()] = {"parts"};
+  for (const auto &option : detector.options ())
+    modes_of[option->long_name ()] = {"detect", "parts"};
+  for (const auto &name : given)
+  {
+    const auto it = modes_of.find (name);
+    if (it == modes_of.end () || it->second.count (flags.mode))
+      continue;
+    std::string modes;
+    for (const auto &m : it->second)
+      modes += (modes.empty () ? "" : " or ") + m;
+    throw std::runtime_error ("--" + name + " applies to agex_eval " + modes + ", not to agex_eval '" + flags.mode +
+                              "'" + (flags.mode == "detect" && it->second.count ("coverage")
+                                         ? " (detect runs the model's own pipeline: change it in a copy of the "
+                                           "model with scripts/set_model_pipeline.py)"
+                                         : ""));
+  }
   finishPipelineOptions (vector_flags, flags.params);
   flags.weak.validate ();
   if (flags.dataset_dir.empty ())
@@ -78,8 +112,6 @@ parseEvalFlags (int argc, char **argv, bool distributed, EvalFlags &flags)
   if (flags.k < 1 || flags.k > 200 || !(flags.radius > 0.f && flags.radius <= 1.f) ||
       !(flags.min_iou > 0.f && flags.min_iou < 1.f))
     throw std::runtime_error ("--k must lie in [1, 200], --radius in (0, 1] m and --min-iou in (0, 1)");
-  if (flags.mode != "coverage" && flags.mode != "detect" && flags.mode != "compare" && flags.mode != "parts")
-    throw std::runtime_error ("unknown mode '" + flags.mode + "' (expected coverage, detect, compare or parts)");
   return true;
 }
 

@@ -6,6 +6,7 @@
 #include <cstddef>
 #include <functional>
 #include <string>
+#include <vector>
 
 namespace agex
 {
@@ -16,6 +17,11 @@ namespace apps
   * \throws boost::program_options::error on an unknown or malformed flag */
 bool parseCommandLine (int argc, char **argv, const boost::program_options::options_description &options,
                        const boost::program_options::positional_options_description &positional);
+/** As above; given (not null) receives the long names of the flags on the command line
+  * (defaults and positional arguments included only when given). */
+bool parseCommandLine (int argc, char **argv, const boost::program_options::options_description &options,
+                       const boost::program_options::positional_options_description &positional,
+                       std::vector<std::string> *given);
 
 /** A file shipped with agex (relative to data/, e.g. "models/agex_bonn.yml"): the installed
   * copy, <prefix>/share/agex/<relative>, when this executable runs from <prefix>/bin,

@@ -56,12 +56,17 @@ PersonEvaluation::addFrame (const std::vector<BodyPartDetection> &detections, co
   for (const auto &[person, b] : band)
   {
     ++persons_[b];
-    bool found = false;
+    bool found = false, found_firing = false;
     for (const auto &l : labels)
       if (l.person == person && l.visible && l.tip.allFinite ())
         for (const auto &d : detections)
-          found = found || (d.part == l.part && (d.position - l.tip).norm () <= radius_);
+          if (d.part == l.part && (d.position - l.tip).norm () <= radius_)
+          {
+            found = true;
+            found_firing = found_firing || d.confidence >= kFiringConfidence;
+          }
     found_[b] += found;
+    found_firing_[b] += found_firing;
   }
   for (int b = 0; b < kBands; ++b)
   {
@@ -87,23 +92,27 @@ nlohmann::json
 PersonEvaluation::report () const
 {
   auto fraction = [] (int n, int of) { return of ? nlohmann::json (static_cast<double> (n) / of) : nlohmann::json (nullptr); };
-  int persons = 0, found = 0, near_persons = 0, near_found = 0;
+  int persons = 0, found = 0, found_firing = 0, near_persons = 0, near_found = 0, near_found_firing = 0;
   for (int b = 0; b <= kBands; ++b)
   {
-    persons += persons_[b], found += found_[b];
+    persons += persons_[b], found += found_[b], found_firing += found_firing_[b];
     if (b < kBands && kBandEdges[b + 1] <= 4.f)
-      near_persons += persons_[b], near_found += found_[b];
+      near_persons += persons_[b], near_found += found_[b], near_found_firing += found_firing_[b];
   }
   nlohmann::json doc = {{"frames", frames_},
                         {"persons", persons},
-                        {"person_recall", fraction (found, persons)},
-                        {"person_recall_within_4m", fraction (near_found, near_persons)},
+                        {"person_recall", fraction (found_firing, persons)},
+                        {"person_recall_within_4m", fraction (near_found_firing, near_persons)},
+                        {"person_recall_any_confidence", fraction (found, persons)},
+                        {"person_recall_any_confidence_within_4m", fraction (near_found, near_persons)},
+                        {"firing_confidence", kFiringConfidence},
                         {"radius_m", radius_}};
   for (int b = 0; b < kBands; ++b)
   {
     nlohmann::json band = {{"metres", {kBandEdges[b], kBandEdges[b + 1]}},
                            {"persons", persons_[b]},
-                           {"person_recall", fraction (found_[b], persons_[b])}};
+                           {"person_recall", fraction (found_firing_[b], persons_[b])},
+                           {"person_recall_any_confidence", fraction (found_[b], persons_[b])}};
     for (int c = 0; c < kBodyPartCount; ++c)
     {
       const double ap = bands_[b].averagePrecision (static_cast<BodyPart> (c));
@@ -124,6 +133,7 @@ PersonEvaluation::state () const
   nlohmann::json doc = {{"radius", radius_},
                         {"persons", persons_},
                         {"found", found_},
+                        {"found_firing", found_firing_},
                         {"frames", frames_},
                         {"frames_with_person_images", frames_with_person_images_},
                         {"non_person_detections", non_person_detections_}};
@@ -140,6 +150,16 @@ PersonEvaluation::fromState (const nlohmann::json &doc, const std::string &sourc
     PersonEvaluation e (doc.at ("radius").get<float> ());
     e.persons_ = doc.at ("persons").get<std::array<int, kBands + 1>> ();
     e.found_ = doc.at ("found").get<std::array<int, kBands + 1>> ();
+    // States written before person recall counted firing detections only are refused
+    // rather than read as finding no one.
+    if (doc.is_object () && !doc.contains ("found_firing"))
+      throw std::invalid_argument (source + ": person evaluation state without \"found_firing\" (written by an "
+                                            "older agex_eval detect; run that share again)");
+    e.found_firing_ = doc.at ("found_firing").get<std::array<int, kBands + 1>> ();
+    for (int b = 0; b <= kBands; ++b)
+      if (e.persons_[b] < 0 || e.found_[b] < 0 || e.found_[b] > e.persons_[b] || e.found_firing_[b] < 0 ||
+          e.found_firing_[b] > e.found_[b])
+        throw std::invalid_argument (source + ": malformed person evaluation state (person counts out of range)");
     e.frames_ = doc.at ("frames").get<int> ();
     e.frames_with_person_images_ = doc.at ("frames_with_person_images").get<int> ();
     e.non_person_detections_ = doc.at ("non_person_detections").get<int> ();
@@ -166,7 +186,7 @@ PersonEvaluation::merge (const PersonEvaluation &other)
   if (other.radius_ != radius_)
     throw std::invalid_argument ("person evaluations with different radii cannot be merged");
   for (int b = 0; b <= kBands; ++b)
-    persons_[b] += other.persons_[b], found_[b] += other.found_[b];
+    persons_[b] += other.persons_[b], found_[b] += other.found_[b], found_firing_[b] += other.found_firing_[b];
   for (int b = 0; b < kBands; ++b)
     bands_[b].merge (other.bands_[b]);
   frames_ += other.frames_;

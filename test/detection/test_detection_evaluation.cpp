@@ -172,8 +172,9 @@ namespace
 {
 TEST (PersonEvaluation, PeopleFoundByDistanceBandAndFiringOnNobody)
 {
-  // Person 1 at 1.5 m (its head found), person 2 at 3 m (nothing of it found), person 3 at
-  // 5 m (its foot found by a detection of the wrong class: not found).
+  // Person 1 at 1.5 m (its head found), person 2 at 3 m (its hand detected, but below the
+  // firing confidence: found at any confidence only), person 3 at 5 m (its foot found by a
+  // detection of the wrong class: not found).
   auto label = [] (int person, agex::BodyPart part, float x, float z) {
     agex::PartLabel l;
     l.person = person;
@@ -185,10 +186,10 @@ TEST (PersonEvaluation, PeopleFoundByDistanceBandAndFiringOnNobody)
   const std::vector<agex::PartLabel> labels{label (1, agex::BodyPart::Head, 0.f, 1.5f),
                                             label (2, agex::BodyPart::Hand, 1.f, 3.f),
                                             label (3, agex::BodyPart::Foot, -1.f, 5.f)};
-  auto detection = [] (agex::BodyPart part, float x, float z, int u, int v) {
+  auto detection = [] (agex::BodyPart part, float x, float z, int u, int v, float confidence = 0.9f) {
     agex::BodyPartDetection d;
     d.part = part;
-    d.confidence = 0.9f;
+    d.confidence = confidence;
     d.position = Eigen::Vector3f (x, 0.f, z);
     d.u = u, d.v = v;
     return d;
@@ -196,13 +197,18 @@ TEST (PersonEvaluation, PeopleFoundByDistanceBandAndFiringOnNobody)
   cv::Mat persons (48, 64, CV_8UC1, cv::Scalar (0));
   persons (cv::Rect (10, 10, 10, 10)) = 1;
   const std::vector<agex::BodyPartDetection> detections{detection (agex::BodyPart::Head, 0.02f, 1.5f, 15, 15),
-                                                        detection (agex::BodyPart::Hand, -1.f, 5.f, 40, 40)};
+                                                        detection (agex::BodyPart::Hand, -1.f, 5.f, 40, 40),
+                                                        detection (agex::BodyPart::Hand, 1.03f, 3.f, 50, 5, 0.2f)};
   agex::PersonEvaluation evaluation (0.1f);
   evaluation.addFrame (detections, labels, &persons);
   const nlohmann::json r = evaluation.report ();
   EXPECT_EQ (r["persons"], 3);
   EXPECT_DOUBLE_EQ (r["person_recall"].get<double> (), 1.0 / 3.0);
   EXPECT_DOUBLE_EQ (r["person_recall_within_4m"].get<double> (), 0.5);
+  EXPECT_DOUBLE_EQ (r["person_recall_any_confidence"].get<double> (), 2.0 / 3.0);
+  EXPECT_DOUBLE_EQ (r["person_recall_any_confidence_within_4m"].get<double> (), 1.0);
+  EXPECT_DOUBLE_EQ (r["bands"][1]["person_recall"].get<double> (), 0.0);
+  EXPECT_DOUBLE_EQ (r["bands"][1]["person_recall_any_confidence"].get<double> (), 1.0);
   EXPECT_EQ (r["bands"][0]["persons"], 1);
   EXPECT_DOUBLE_EQ (r["bands"][0]["ap"]["head"].get<double> (), 1.0);
   EXPECT_DOUBLE_EQ (r["bands"][2]["ap"]["foot"].get<double> (), 0.0);
@@ -215,7 +221,25 @@ TEST (PersonEvaluation, PeopleFoundByDistanceBandAndFiringOnNobody)
   a.merge (agex::PersonEvaluation::fromState (b.state (), "b"));
   EXPECT_EQ (a.report ()["persons"], 6);
   EXPECT_DOUBLE_EQ (a.report ()["person_recall"].get<double> (), 1.0 / 6.0);
+  EXPECT_DOUBLE_EQ (a.report ()["person_recall_any_confidence"].get<double> (), 2.0 / 6.0);
   EXPECT_DOUBLE_EQ (a.report ()["non_person_detections_per_frame"].get<double> (), 1.0);
+  // A state from before firing detections were counted apart is refused, naming its source,
+  // and so are counts that cannot be (more persons found than there are).
+  nlohmann::json old_state = evaluation.state ();
+  old_state.erase ("found_firing");
+  try
+  {
+    agex::PersonEvaluation::fromState (old_state, "part-1.json");
+    ADD_FAILURE () << "an old state was read";
+  }
+  catch (const std::invalid_argument &e)
+  {
+    EXPECT_NE (std::string (e.what ()).find ("part-1.json"), std::string::npos) << e.what ();
+    EXPECT_NE (std::string (e.what ()).find ("found_firing"), std::string::npos) << e.what ();
+  }
+  nlohmann::json impossible = evaluation.state ();
+  impossible["found_firing"][0] = 5;
+  EXPECT_THROW (agex::PersonEvaluation::fromState (impossible, "part-2.json"), std::invalid_argument);
 }
 }  // namespace
 

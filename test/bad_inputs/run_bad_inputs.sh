@@ -270,6 +270,7 @@ mkdir -p fifo && mkfifo fifo/frame.u16
 (cd in && find . -type f -print0 | sort -z | xargs -0 sha256sum) > inputs.sha256
 check "model nested 100,000 deep ([[[...)" 1 "nested_model.yml:3: nested more than 1000 levels deep" $D in/frame.png --model in/nested_model.yml --json out/a.json
 check "the same model for agex_eval" 1 "nested_model.yml:3: nested more than 1000 levels deep" $E compare --dataset in/dataset --model-agex in/nested_model.yml
+check "the same model for agex_eval detect" 1 "nested_model.yml:3: nested more than 1000 levels deep" $E detect --dataset in/dataset --model in/nested_model.yml
 if [ -x "$BIN/agex_landmarks_train" ]; then
   check "imglab XML nested 50,000 deep, agex_landmarks_train" 1 "nested_imglab.xml:.*nested more than 64" $BIN/agex_landmarks_train --dataset in/nested_imglab.xml --out out/shape.dat
   check "the same XML for agex_landmarks_eval" 1 "nested_imglab.xml:.*nested more than 64" $BIN/agex_landmarks_eval --dataset in/nested_imglab.xml --model out/shape.dat

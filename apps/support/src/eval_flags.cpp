@@ -85,8 +85,11 @@ parseEvalFlags (int argc, char **argv, bool distributed, EvalFlags &flags)
       {"window-stride", {"compare"}}, {"window-scales", {"compare"}}};
   for (const auto &option : pipeline.options ())
     modes_of[option->long_name ()] = {"coverage"};
-  const po::options_description weak = weakLabelOptions (flags.weak),
-                                 detector = detectorOptionsDescription (flags.detector, kBundledModelFile);
+  // Descriptions of scratch settings: describing flags.detector again would reset its --model.
+  WeakPartLabelParams scratch_weak;
+  DetectorChoice scratch_detector;
+  const po::options_description weak = weakLabelOptions (scratch_weak),
+                                 detector = detectorOptionsDescription (scratch_detector, kBundledModelFile);
   for (const auto &option : weak.options ())
     modes_of[option->long_name ()] = {"parts"};
   for (const auto &option : detector.options ())

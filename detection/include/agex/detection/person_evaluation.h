@@ -28,9 +28,10 @@ public:
 
   /** \brief One frame: a person is found when a firing detection of the right class lies
     * within the radius of one of its visible tips (and found at any confidence when a
-    * detection of any confidence does: what a lower threshold could reach). persons (may be null or empty): the frame's person
-    * image (0: nobody), for the detections on nobody's surface (a detection fires there
-    * when its pixel and the pixels within 2 of it all show nobody). */
+    * detection of any confidence does: what a lower threshold could reach). persons (may
+    * be null or empty): the frame's person image (0: nobody), for the detections on
+    * nobody's surface (a detection fires there when its pixel and the pixels within 2 of
+    * it all show nobody). */
   void addFrame (const std::vector<BodyPartDetection> &detections, const std::vector<PartLabel> &labels,
                  const cv::Mat *persons = nullptr);
 

@@ -61,6 +61,24 @@ check () {
   fi
 }
 
+# capped MEGABYTES SECONDS command...: runs the command with its memory and time bounded, so
+# that an input which would blow up is refused within the bound (a run past it is killed and
+# its case fails on the exit code). The memory cap is ulimit -v where the apps start under it;
+# a sanitizer build reserves terabytes of address space, so there ASan's RSS limit stands in.
+if (ulimit -v 4194304; "$BIN/agex_detect" --help) >/dev/null 2>&1; then memory_cap=ulimit; else memory_cap=asan; fi
+capped () {
+  local megabytes=$1 seconds=$2
+  shift 2
+  if [ "$memory_cap" = ulimit ]; then
+    (ulimit -v $((megabytes * 1024)); exec timeout -s KILL "$seconds" "$@")
+  else
+    ASAN_OPTIONS="${ASAN_OPTIONS:+$ASAN_OPTIONS:}hard_rss_limit_mb=$megabytes" timeout -s KILL "$((seconds * 4))" "$@"
+  fi
+}
+
+# hash_inputs: records every input's checksum (call again after adding inputs).
+hash_inputs () { (cd "$WORK/in" && find . -type f -print0 | sort -z | xargs -0 sha256sum) > "$WORK/inputs.sha256"; }
+
 # check_kept CASE FILE CONTENT: an earlier output survives the failed run before it.
 check_kept () {
   if [ "$(cat "$2" 2>/dev/null)" != "$3" ]; then
@@ -314,6 +332,14 @@ grep -q '"sequence": "séq"' out/utf/dataset.json && grep -q '"sequence": "sèq"
 check "two directories of one name" 1 "would both be sequence 'take'" $C pcd --input in/take_a/take in/take_b/take --output out/take
 check "--depth-scale 0" 1 "--depth-scale must be a positive number" $K in/frame.png --depth-scale 0
 check "--min-confidence nan" 1 "--min-confidence must lie in \\[0, 1\\]" $D in/frame.png --min-confidence nan
+
+# Further cases, one file per concern (test/bad_inputs/cases/*.sh), in name order; each adds
+# its inputs under in/ and calls hash_inputs before its checks.
+for cases in "$SRC"/test/bad_inputs/cases/*.sh; do
+  [ -e "$cases" ] || continue
+  # shellcheck source=/dev/null
+  source "$cases"
+done
 
 if [ "$failures" -gt 0 ]; then
   echo "$failures bad-input case(s) failed" >&2

@@ -429,8 +429,13 @@ BodyPartForest::check () const
   }
   if (trees_.empty () || trees_.size () > static_cast<std::size_t> (kMaxTrees))
     throw ModelError ("a forest needs 1 to " + std::to_string (kMaxTrees) + " trees, not " + std::to_string (trees_.size ()));
-  if (!std::isfinite (reference_focal_) || !(reference_focal_ > 0.f))
-    throw ModelError ("the reference focal length must be finite and positive");
+  if (!(reference_focal_ >= kMinReferenceFocal && reference_focal_ <= kMaxReferenceFocal))
+  {
+    std::ostringstream text;
+    text << "the reference focal length " << reference_focal_ << " px lies outside " << kMinReferenceFocal << " to "
+         << kMaxReferenceFocal << " px";
+    throw ModelError (text.str ());
+  }
   if (background_class_ < -1 || background_class_ >= C)
     throw ModelError ("background class " + std::to_string (background_class_) + " out of range");
   for (std::size_t t = 0; t < trees_.size (); ++t)

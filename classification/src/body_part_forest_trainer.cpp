@@ -340,12 +340,12 @@ BodyPartForestTrainer::train (const std::vector<BodyPartTrainingFrame> &frames, 
     throw std::invalid_argument ("the trainer needs 1 to 255 classes");
   if (P.trees < 1 || P.trees > BodyPartForest::kMaxTrees || P.max_depth < 0 || P.max_depth > BodyPartForest::kMaxDepth ||
       P.features_per_node < 1 || P.thresholds_per_feature < 1 || P.pixels_per_frame < 1 || P.offset_range < 1 ||
-      P.offset_range > 32767 || P.min_samples_per_leaf < 1 || P.threads < 1 || !(P.reference_focal > 0.f) ||
-      !std::isfinite (P.reference_focal) || !(P.unary_probability >= 0.f && P.unary_probability <= 1.f) ||
+      P.offset_range > 32767 || P.min_samples_per_leaf < 1 || P.threads < 1 || !(P.reference_focal >= BodyPartForest::kMinReferenceFocal) ||
+      !(P.reference_focal <= BodyPartForest::kMaxReferenceFocal) || !(P.unary_probability >= 0.f && P.unary_probability <= 1.f) ||
       !std::isfinite (P.min_gain) || P.foreground_dilation < 0)
     throw std::invalid_argument ("forest trainer parameters out of range: trees 1-64, depth 0-24, features, "
                                  "thresholds, pixels per frame, min samples per leaf and threads at least 1, offset "
-                                 "range 1-32767, a positive reference focal length, unary probability in [0, 1]");
+                                 "range 1-32767, a reference focal length of 10 to 100000 px, unary probability in [0, 1]");
 
   std::vector<ForestDepthImage> images (frames.size ());
   std::vector<std::vector<Sample>> candidates (frames.size ());

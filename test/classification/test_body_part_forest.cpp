@@ -14,6 +14,7 @@
 
 #include <pcl/io/pcd_io.h>
 
+#include <boost/crc.hpp>
 #include <boost/iostreams/filter/bzip2.hpp>
 #include <boost/iostreams/filtering_stream.hpp>
 
@@ -781,6 +782,23 @@ TEST (BodyPartForest, ModelRoundTripAndDamage)
   refused (version, "version 2");
   // Magic present but nothing else: truncated, not a PCL file.
   refused (bytes.substr (0, 8), "truncated");
+  // A reference focal length of 1 px, checksum intact: refused on load, naming the file and
+  // the field (it once loaded, and then every frame was refused by evaluate ()).
+  for (const float focal : {1.f, 9.f, 2e5f, std::numeric_limits<float>::infinity ()})
+  {
+    std::string tiny = bytes;
+    const std::size_t at = 8 + 4 + 8 + 4 * 3 + 4;  // magic, version, size, C T rule, background
+    std::memcpy (&tiny[at], &focal, 4);
+    boost::crc_32_type crc;
+    crc.process_bytes (tiny.data (), tiny.size () - 4);
+    const std::uint32_t sum = crc.checksum ();
+    for (int b = 0; b < 4; ++b)
+      tiny[tiny.size () - 4 + b] = static_cast<char> ((sum >> (8 * b)) & 0xff);
+    refused (tiny, "reference focal length");
+  }
+  EXPECT_THROW (BodyPartForest (fourClasses (), {twoLevelTree ()}, 1.f, BodyPartForest::VoteRule::Average, -1),
+                agex::ModelError);
+  EXPECT_NO_THROW (BodyPartForest (fourClasses (), {twoLevelTree ()}, 10.f, BodyPartForest::VoteRule::Average, -1));
   // A structurally invalid forest with a valid checksum is refused by the checks.
   {
     Tree bad = sparse;

@@ -124,6 +124,11 @@ public:
   static constexpr float kFeatureScale = 1000.f;
   /** The focal length PCL's trees were trained for (label_common.h FOCAL, the Kinect's). */
   static constexpr float kPclFocalLength = 525.f;
+  /** The reference focal lengths a forest may have, pixels. Depth cameras have about 100 to a
+    * few thousand; evaluate () refuses a camera more than 50 times the reference, so a forest
+    * made for 1 px would load and then refuse every frame. */
+  static constexpr float kMinReferenceFocal = 10.f;
+  static constexpr float kMaxReferenceFocal = 1e5f;
   /** PCL's label for pixels at kBackground (multi_tree.cu, KernelCUDA_MultiTreePass). */
   static constexpr int kPclBackgroundLabel = 29;
   /** PCL's NUM_LABELS (tree.h): labels of a PCL forest are 0..31. */

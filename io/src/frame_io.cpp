@@ -1,3 +1,4 @@
+#include <agex/common/focal_length.h>
 #include <agex/io/frame_io.h>
 #include <agex/io/input_file.h>
 #include <agex/io/pcd_reader.h>
@@ -13,6 +14,7 @@
 #include <fstream>
 #include <limits>
 #include <sstream>
+#include <tuple>
 
 namespace fs = std::filesystem;
 
@@ -138,6 +140,47 @@ defaultDepthScale (int cv_depth)
   return cv_depth == CV_8U ? 0.016 : 0.001;
 }
 
+std::string
+intrinsicProblem (IntrinsicKind kind, double value)
+{
+  const double float_max = std::numeric_limits<float>::max ();
+  std::ostringstream text;
+  switch (kind)
+  {
+  case IntrinsicKind::kFocalLength:
+    if (saneFocalLength (value))
+      return "";
+    text << "must be a focal length of " << kMinFocalLength << " to " << kMaxFocalLength << " pixels";
+    break;
+  case IntrinsicKind::kPrincipalPoint:
+    if (std::abs (value) <= float_max)
+      return "";
+    text << "must be a number of pixels finite as a float (at most " << float_max << " in size)";
+    break;
+  case IntrinsicKind::kDepthScale:
+    if (value > 0.0 && value <= float_max)
+      return "";
+    text << "must be a positive number of metres per depth unit, finite as a float";
+    break;
+  }
+  text << "; got " << value;
+  return text.str ();
+}
+
+void
+checkIntrinsics (const CameraIntrinsics &k)
+{
+  for (const auto &[name, value, kind] :
+       {std::make_tuple ("fx", k.fx, IntrinsicKind::kFocalLength), std::make_tuple ("fy", k.fy, IntrinsicKind::kFocalLength),
+        std::make_tuple ("cx", k.cx, IntrinsicKind::kPrincipalPoint),
+        std::make_tuple ("cy", k.cy, IntrinsicKind::kPrincipalPoint)})
+  {
+    const std::string problem = intrinsicProblem (kind, value);
+    if (!problem.empty ())
+      throw FrameError (std::string (name) + " " + problem);
+  }
+}
+
 void
 depthImageToCloud (const cv::Mat &depth, const CameraIntrinsics &intrinsics, double depth_scale,
                    pcl::PointCloud<pcl::PointXYZ> &cloud)
@@ -145,17 +188,17 @@ depthImageToCloud (const cv::Mat &depth, const CameraIntrinsics &intrinsics, dou
   const int type = depth.depth ();
   if (depth.empty () || depth.channels () != 1 || (type != CV_8U && type != CV_16U && type != CV_32F))
     throw FrameError ("depth image must be a non-empty single-channel 8 or 16-bit or 32-bit float image");
-  if (!(depth_scale > 0.0) || !std::isfinite (depth_scale))
-    throw FrameError ("depth scale must be a positive number of metres per unit");
-  if (!(intrinsics.fx > 0.0) || !(intrinsics.fy > 0.0) || !std::isfinite (intrinsics.fx) ||
-      !std::isfinite (intrinsics.fy) || !std::isfinite (intrinsics.cx) || !std::isfinite (intrinsics.cy))
-    throw FrameError ("focal lengths fx, fy must be positive, and fx, fy, cx, cy finite");
+  const std::string scale_problem = intrinsicProblem (IntrinsicKind::kDepthScale, depth_scale);
+  if (!scale_problem.empty ())
+    throw FrameError ("depth scale " + scale_problem);
+  checkIntrinsics (intrinsics);
 
   cloud.width = static_cast<std::uint32_t> (depth.cols);
   cloud.height = static_cast<std::uint32_t> (depth.rows);
   cloud.is_dense = false;
   cloud.resize (cloud.width * cloud.height);
   const float nan = std::numeric_limits<float>::quiet_NaN ();
+  const double float_max = std::numeric_limits<float>::max ();
   const double inv_fx = 1.0 / intrinsics.fx, inv_fy = 1.0 / intrinsics.fy;
   for (int v = 0; v < depth.rows; ++v)
     for (int u = 0; u < depth.cols; ++u)
@@ -166,13 +209,15 @@ depthImageToCloud (const cv::Mat &depth, const CameraIntrinsics &intrinsics, dou
                                           : static_cast<double> (depth.at<float> (v, u));
       pcl::PointXYZ &p = cloud (u, v);
       const double z = raw * depth_scale;
-      if (!(raw > 0.0) || !std::isfinite (z))
+      // A point is floats: one beyond their range (a float image's 3e38 m far off-centre) is no point.
+      const double x = (u - intrinsics.cx) * z * inv_fx, y = (v - intrinsics.cy) * z * inv_fy;
+      if (!(raw > 0.0) || !(z <= float_max && std::abs (x) <= float_max && std::abs (y) <= float_max))
       {
         p.x = p.y = p.z = nan;
         continue;
       }
-      p.x = static_cast<float> ((u - intrinsics.cx) * z * inv_fx);
-      p.y = static_cast<float> ((v - intrinsics.cy) * z * inv_fy);
+      p.x = static_cast<float> (x);
+      p.y = static_cast<float> (y);
       p.z = static_cast<float> (z);
     }
 }
@@ -181,7 +226,7 @@ namespace
 {
 /** The intrinsics must be stated for this image size, with the principal point inside it. */
 void
-checkIntrinsics (const std::string &path, const cv::Mat &depth, const FrameOptions &options)
+checkImageIntrinsics (const std::string &path, const cv::Mat &depth, const FrameOptions &options)
 {
   const CameraIntrinsics &k = options.intrinsics;
   const int w = depth.cols, h = depth.rows;
@@ -252,7 +297,7 @@ loadFrame (const std::string &path, const FrameOptions &options)
     fail (path, "a " + std::to_string (depth.cols) + "x" + std::to_string (depth.rows) +
                     " image; a depth frame needs at least 2 rows and 2 columns");
 
-  checkIntrinsics (path, depth, options);
+  checkImageIntrinsics (path, depth, options);
   if (!(options.depth_scale >= 0.0) || !std::isfinite (options.depth_scale))
     fail (path, "the depth scale must be a positive number of metres per unit (or 0 for the format's default)");
 

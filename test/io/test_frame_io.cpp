@@ -745,6 +745,57 @@ TEST (FrameIo, DepthImageToCloudRejectsBadInput)
   EXPECT_FLOAT_EQ (cloud (2, 2).z, 1.f);
 }
 
+TEST (FrameIo, IntrinsicsOutsideTheSaneRangeAreRefusedByName)
+{
+  // Focal lengths of 1e-6 px (metres-wide cells that crashed the person segmentation) and
+  // 1e39 (finite as a double, infinite as a float: no detections without a word) are refused,
+  // naming the intrinsic; so are a principal point and a depth scale beyond a float's range.
+  Cloud cloud;
+  const cv::Mat depth (4, 4, CV_16UC1, cv::Scalar (1000));
+  auto refused = [&] (agex::CameraIntrinsics k, double scale, const std::string &needle) {
+    expectFrameError ([&] { agex::depthImageToCloud (depth, k, scale, cloud); }, {needle});
+  };
+  agex::CameraIntrinsics k;
+  for (const double f : {1e-6, 1e-30, 1e39, 2e6, -1.0})
+  {
+    k = agex::CameraIntrinsics ();
+    k.fx = f;
+    refused (k, 0.001, "fx must be a focal length of 0.001 to 1e+06 pixels");
+    k = agex::CameraIntrinsics ();
+    k.fy = f;
+    refused (k, 0.001, "fy must be a focal length");
+  }
+  k = agex::CameraIntrinsics ();
+  k.cy = 1e39;
+  refused (k, 0.001, "cy must be a number of pixels finite as a float");
+  refused (agex::CameraIntrinsics (), 1e39, "depth scale must be a positive number");
+  EXPECT_EQ (agex::intrinsicProblem (agex::IntrinsicKind::kFocalLength, 1e-3), "");
+  EXPECT_EQ (agex::intrinsicProblem (agex::IntrinsicKind::kFocalLength, 1e6), "");
+  EXPECT_NE (agex::intrinsicProblem (agex::IntrinsicKind::kFocalLength, 1e-5), "");
+  // Through loadFrame: the file named as well.
+  TempDir dir;
+  const std::string png = dir.file ("frame.png");
+  cv::imwrite (png, cv::Mat (480, 640, CV_16UC1, cv::Scalar (1000)));
+  agex::FrameOptions options;
+  options.intrinsics.fx = 1e-6;
+  expectFrameError ([&] { agex::loadFrame (png, options); }, {png, "fx must be a focal length"});
+}
+
+TEST (FrameIo, PointsBeyondAFloatAreInvalid)
+{
+  // 3e38 m at the principal point is a float; off-centre its x is not: NaN, never infinite.
+  const cv::Mat depth (2, 2, CV_32FC1, cv::Scalar (3e38f));
+  agex::CameraIntrinsics k;
+  k.fx = k.fy = 0.5;
+  k.cx = k.cy = 0.0;
+  Cloud cloud;
+  agex::depthImageToCloud (depth, k, 1.0, cloud);
+  EXPECT_FLOAT_EQ (cloud (0, 0).z, 3e38f);
+  for (const auto &p : cloud)
+    EXPECT_TRUE ((std::isfinite (p.x) && std::isfinite (p.y) && std::isfinite (p.z)) || std::isnan (p.z));
+  EXPECT_TRUE (std::isnan (cloud (1, 1).z));
+}
+
 TEST (FrameIo, FloatDepthImagesInMetresWithTheirInvalidValues)
 {
   // A float image (metres, as numpy users hand it over), read through a row step wider than

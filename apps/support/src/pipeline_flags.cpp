@@ -48,14 +48,16 @@ formatVector (const Eigen::Vector3f &v)
 po::options_description
 frameOptionsDescription (FrameOptions &options)
 {
-  // Checked as they are parsed: a NaN focal length would give empty frames, not an error.
+  // Checked as they are parsed (agex::intrinsicProblem, as frames and Python are): a NaN or
+  // 1e-6 px focal length would give empty frames, not an error.
   // An intrinsic given on the command line is meant for the frames at hand, whatever their
   // size; the defaults are the Kinect's at 640x480 and are refused for frames of another size.
-  const auto intrinsic = [&options] (double CameraIntrinsics::*field, const char *name, bool must_be_positive) {
-    return [&options, field, name, must_be_positive] (double v) {
-      if (!std::isfinite (v) || (must_be_positive && !(v > 0.0)))
-        throw std::runtime_error (std::string ("--") + name + " must be a " +
-                                  (must_be_positive ? "positive" : "finite") + " number");
+  const auto intrinsic = [&options] (double CameraIntrinsics::*field, const char *name, bool focal_length) {
+    return [&options, field, name, focal_length] (double v) {
+      const std::string problem =
+          intrinsicProblem (focal_length ? IntrinsicKind::kFocalLength : IntrinsicKind::kPrincipalPoint, v);
+      if (!problem.empty ())
+        throw std::runtime_error (std::string ("--") + name + " " + problem);
       options.intrinsics.*field = v;
       options.intrinsics_width = options.intrinsics_height = 0;
     };
@@ -85,9 +87,9 @@ frameOptionsDescription (FrameOptions &options)
        }
        std::istringstream in (text);
        double v = 0.0;
-       if (!(in >> v) || !(in >> std::ws).eof () || !(v > 0.0) || !std::isfinite (v))
-         throw std::runtime_error ("--depth-scale must be a positive number of metres per depth unit, or auto; got '" +
-                                   text + "'");
+       if (!(in >> v) || !(in >> std::ws).eof () || !intrinsicProblem (IntrinsicKind::kDepthScale, v).empty ())
+         throw std::runtime_error ("--depth-scale must be a positive number of metres per depth unit, finite as a "
+                                   "float, or auto; got '" + text + "'");
        options.depth_scale = v;
      }),
      "metres per depth unit; auto: 0.016 for 8-bit PNG (Bonn), 0.001 for 16-bit PNG and .u16")

@@ -23,6 +23,24 @@ struct CameraIntrinsics
   double cy = 239.5;
 };
 
+/** What an intrinsic or depth scale is, for intrinsicProblem. */
+enum class IntrinsicKind
+{
+  kFocalLength,     ///< fx, fy: kMinFocalLength to kMaxFocalLength pixels (agex/common/focal_length.h)
+  kPrincipalPoint,  ///< cx, cy: finite as a float
+  kDepthScale       ///< metres per depth unit: positive and finite as a float
+};
+
+/** \brief What is wrong with value as an intrinsic or depth scale of that kind, worded to
+  * follow its name ("must be ...; got ..."); "" when nothing is. The one check of the apps'
+  * flags, the Python module and depthImageToCloud. Points are floats: a value finite only as
+  * a double would give infinite points, or none without a word. */
+std::string intrinsicProblem (IntrinsicKind kind, double value);
+
+/** \brief Checks fx, fy, cx and cy with intrinsicProblem.
+  * \throws FrameError naming the first that is wrong ("fx must be ...") */
+void checkIntrinsics (const CameraIntrinsics &intrinsics);
+
 /** How to interpret a depth image. */
 struct FrameOptions
 {
@@ -79,8 +97,9 @@ double defaultDepthScale (int cv_depth);
 /** \brief Back-projects a single-channel CV_8U, CV_16U or CV_32F depth image (depth =
   * value x depth_scale metres); 0 is invalid, and so are a float image's NaN, infinite and
   * negative values. Any row step is read as it is (no copy of the image).
-  * \throws FrameError on an unsupported image type, a depth scale that is not positive, focal
-  *         lengths that are not positive or intrinsics that are not finite */
+  * Points whose coordinates do not fit a float are invalid (NaN).
+  * \throws FrameError on an unsupported image type, or a depth scale or intrinsics that
+  *         intrinsicProblem finds wrong */
 void
 depthImageToCloud (const cv::Mat &depth, const CameraIntrinsics &intrinsics,
                    double depth_scale, pcl::PointCloud<pcl::PointXYZ> &cloud);

@@ -2,6 +2,8 @@
 
 #include <agex/classification/part_modes.h>
 
+#include <agex/common/statistics.h>
+
 #include <pcl/console/print.h>
 
 #include <Eigen/Eigenvalues>
@@ -32,6 +34,14 @@ cellKey (int i, int j, int k)
   return (b (i) << 42) | (b (j) << 21) | b (k);
 }
 
+/** The cell of coordinate v, within cellKey's range: far-off points share the edge cells
+  * rather than overflow an int. */
+int
+cellOf (float v, float size)
+{
+  return clampedInt (std::floor (v / size), -(1 << 20), (1 << 20) - 1);
+}
+
 /** The samples' indices grouped by cubic cell of the given size: cells in key order, each
   * cell's indices ascending. */
 std::vector<std::vector<int>>
@@ -42,8 +52,7 @@ groupByCell (const std::vector<Sample> &samples, float size)
   for (std::size_t i = 0; i < samples.size (); ++i)
   {
     const Eigen::Vector3f &x = samples[i].x;
-    keyed.emplace_back (cellKey (static_cast<int> (std::floor (x.x () / size)), static_cast<int> (std::floor (x.y () / size)),
-                                 static_cast<int> (std::floor (x.z () / size))),
+    keyed.emplace_back (cellKey (cellOf (x.x (), size), cellOf (x.y (), size), cellOf (x.z (), size)),
                         static_cast<int> (i));
   }
   std::sort (keyed.begin (), keyed.end ());
@@ -74,8 +83,7 @@ public:
   }
   Eigen::Vector3i coords (const Eigen::Vector3f &x) const
   {
-    return Eigen::Vector3i (static_cast<int> (std::floor (x.x () / cell_)), static_cast<int> (std::floor (x.y () / cell_)),
-                            static_cast<int> (std::floor (x.z () / cell_)));
+    return Eigen::Vector3i (cellOf (x.x (), cell_), cellOf (x.y (), cell_), cellOf (x.z (), cell_));
   }
   std::size_t cellCount () const { return cells_.size (); }
   const std::vector<int> &cell (int id) const { return cells_[static_cast<std::size_t> (id)]; }

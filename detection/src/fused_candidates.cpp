@@ -1,6 +1,7 @@
 #include <agex/detection/fused_candidates.h>
 
 #include <agex/classification/body_part_labeling.h>
+#include <agex/common/statistics.h>
 
 #include <algorithm>
 #include <chrono>
@@ -62,7 +63,7 @@ forestStrideFor (int stride, float fx)
     return stride;
   if (!(fx > 0.f) || !std::isfinite (fx))
     return 1;
-  return std::clamp (static_cast<int> (std::floor (fx / 250.f)), 1, 8);
+  return clampedInt (std::floor (fx / 250.f), 1, 8);  // fx may be far beyond an int
 }
 
 bool
@@ -222,7 +223,7 @@ FusedFeatures::meanProbabilities (int index, const Eigen::Vector3f &at, float ra
     return;
   const int width = static_cast<int> (labels_.width), height = static_cast<int> (labels_.height);
   const int u0 = index % width, v0 = index / width;
-  const int r = std::clamp (static_cast<int> (std::ceil (radius * fx_ / at.z ())), 0, 64);
+  const int r = clampedInt (std::ceil (radius * fx_ / at.z ()), 0, 64);  // a point at 1e-30 m
   const float r2 = radius * radius;
   double sum[kLabelPartCount] = {0.0, 0.0, 0.0, 0.0};
   int count = 0;

@@ -765,6 +765,52 @@ TEST (PersonSegmentation, InvalidSettingsGiveNoPersons)
              0u);
 }
 
+TEST (PersonSegmentation, AbsurdlyLargeOrSmallFramesGiveNoPersonsAndNoCrash)
+{
+  // Each of these once crashed in the bins of a cluster (a coordinate difference over the bin
+  // size overflowed the int index): metric sizes that do not fit the frame give no persons.
+  agex_test::QuietPcl quiet;
+  // 16x12 points 1e8 m apart at 2 m depth (agex_keypoints tiny.pcd).
+  Cloud::Ptr tiny (new Cloud (16, 12));
+  for (int v = 0; v < 12; ++v)
+    for (int u = 0; u < 16; ++u)
+      (*tiny) (u, v).getVector3fMap () = Eigen::Vector3f ((u - 8) * 1e8f, (v - 6) * 1e8f, 2.f);
+  EXPECT_TRUE (segment (tiny).persons.empty ());
+
+  Scene scene;
+  scene.addPerson (0.0, 3.0);
+  const Cloud::Ptr cloud = scene.render (DepthCamera ());
+  ASSERT_EQ (segment (cloud).persons.size (), 1u);
+  // Focal lengths of 1e-6 and 1e-30 px (--fx 1e-6 --fy 1e-6), and 1e30: refused, not used.
+  for (const float f : {1e-6f, 1e-30f, 1e30f})
+  {
+    Segmentation seg;
+    seg.setFocalLength (f, f);
+    EXPECT_TRUE (segment (cloud, &seg).persons.empty ()) << f;
+  }
+  // A head distance beyond any profile: the peak window is the profile, not an overflowed int.
+  Segmentation wide;
+  wide.setSplitLimits (3e38f, 0.15f);
+  EXPECT_EQ (segment (cloud, &wide).persons.size (), 1u);
+  // The person's x and y scaled by 1e7 (the Bonn frame so scaled crashed): the fitted focal
+  // length is far below a pixel.
+  Cloud::Ptr stretched (new Cloud (*cloud));
+  for (auto &p : *stretched)
+    p.x *= 1e7f, p.y *= 1e7f;
+  Segmentation estimated;
+  EXPECT_TRUE (segment (stretched, &estimated).persons.empty ());
+  EXPECT_LT (estimated.getUsedFocalLengthX (), 1e-3f);
+  // Depths of 3.4e38 m (a float depth image of FLT_MAX) with the camera's focal length: finite
+  // coordinates whose differences are infinite.
+  Cloud::Ptr far (new Cloud (*cloud));
+  for (auto &p : *far)
+    if (std::isfinite (p.z))
+      p.getVector3fMap () *= 3.4e38f / std::max (p.z, 1.f);
+  Segmentation given;
+  given.setFocalLength (525.f, 525.f);
+  EXPECT_TRUE (segment (far, &given).persons.empty ());
+}
+
 // ---------------------------------------------------------------------------------------
 // Real frames
 

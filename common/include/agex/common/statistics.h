@@ -22,6 +22,15 @@ double median (std::vector<double> values);
   * ties in the order given. 0 when there are no positives. */
 double averagePrecision (std::vector<std::pair<double, bool>> scored, std::size_t positives);
 
+/** v as an int clamped to [lo, hi] (NaN: lo), truncated toward zero. Sizes and indices
+  * computed from coordinates or intrinsics may lie far beyond an int, and converting such a
+  * float to an int is undefined (in practice INT_MIN: a negative index). */
+inline int
+clampedInt (double v, int lo, int hi)
+{
+  return v >= lo ? (v <= hi ? static_cast<int> (v) : hi) : lo;
+}
+
 /** Degrees between two directions (unit or not); NaN when either is zero or not finite. */
 double angleBetweenDeg (const Eigen::Vector3f &a, const Eigen::Vector3f &b);
 }  // namespace agex

@@ -191,7 +191,9 @@ public:
   void setMinFloorSpread (float metres) { min_floor_spread_ = metres; }
   float getMinFloorSpread () const { return min_floor_spread_; }
 
-  /** Focal lengths in pixels; 0 (default): estimated from the cloud. */
+  /** Focal lengths in pixels; 0 (default): estimated from the cloud. Given or estimated, a
+    * focal length outside kMinFocalLength to kMaxFocalLength (agex/common/focal_length.h; a
+    * cloud whose points are not a camera's at metric scale) gives no persons and a PCL_ERROR. */
   void setFocalLength (float fx, float fy)
   {
     fx_ = fx;

@@ -50,7 +50,7 @@ autoSpurIterations (const pcl::PointCloud<pcl::PointXYZ> &cloud, const pcl::Indi
   const float median_spacing = spacing[spacing.size () / 2];
   if (!(median_spacing > 0.f))
     return 0;
-  return std::clamp (static_cast<int> (std::lround (spur_depth / median_spacing)), 1, 16);
+  return clampedInt (std::round (spur_depth / median_spacing), 1, 16);  // spacing may be absurd
 }
 
 /** The points of sorted that are not in removed, a sorted subsequence of it. */

@@ -1,6 +1,8 @@
 #pragma once
 
+#include <agex/common/focal_length.h>
 #include <agex/common/organized_neighbourhood.h>
+#include <agex/common/statistics.h>
 #include <agex/filters/floor_removal.h>
 #include <agex/filters/person_segmentation.h>
 
@@ -167,6 +169,14 @@ floorSpread (const pcl::PointCloud<PointT> &cloud, const pcl::Indices &indices, 
   const Eigen::Matrix2d covariance = products / count - mean * mean.transpose ();
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> solver (covariance, Eigen::EigenvaluesOnly);
   return static_cast<float> (std::sqrt (std::max (0.0, solver.eigenvalues ()[0])));
+}
+
+/** The bin of value in n bins of size bin from lo, clamped to [0, n): a coordinate far from
+  * lo (or an infinite or NaN difference) must not overflow the int. */
+inline int
+binIndex (float value, float lo, float bin, int n)
+{
+  return clampedInt ((value - lo) / bin, 0, n - 1);
 }
 
 /** Extent of the bins whose height span reaches min_span (0 if none). */
@@ -411,6 +421,16 @@ agex::PersonSegmentation<PointT>::segment (pcl::PointCloud<pcl::Label> &labels, 
   estimateFocalLengths (scan);
   used_fx_ = scan.fx;
   used_fy_ = scan.fy;
+  if (!saneFocalLength (scan.fx) || !saneFocalLength (scan.fy))
+  {
+    // Cells, bins and windows are metric sizes over pixels: such a frame has none that fit.
+    PCL_ERROR ("[agex::%s::segment] Focal lengths %g, %g px (%s) lie outside %g to %g px: the points are not a "
+               "camera's at metric scale (coordinates far too large or small); no persons.\n",
+               getClassName ().c_str (), scan.fx, scan.fy,
+               fx_ > 0.f && fy_ > 0.f ? "as given" : "estimated from the points", kMinFocalLength, kMaxFocalLength);
+    deinitCompute ();
+    return;
+  }
   const bool any_cell = buildCoarseGrid (scan);
   used_step_ = scan.step;
   if (!any_cell)
@@ -483,12 +503,18 @@ agex::PersonSegmentation<PointT>::estimateFocalLengths (detail::PersonScan &scan
     const double var_a = m > 0 ? saa - sa * sa / m : 0.0, var_b = m > 0 ? sbb - sb * sb / m : 0.0;
     const double efx = var_a > 1e-12 ? (sua - su * sa / m) / var_a : 0.0;
     const double efy = var_b > 1e-12 ? (svb - sv * sb / m) / var_b : 0.0;
-    // Too few or degenerate points: the Kinect's 525 px at 640 columns, scaled.
+    // Too few or degenerate points: the Kinect's 525 px at 640 columns, scaled. A fit far
+    // below a pixel is kept: such points are not at metric scale, and segment () says so.
     const double fallback = 525.0 * width / 640.0;
+    auto fitted = [&] (double e) {
+      return static_cast<float> (m >= 16 && std::isfinite (e) && (e > 1.0 || (e > 0.0 && e < kMinFocalLength))
+                                     ? e
+                                     : fallback);
+    };
     if (!(fx > 0.f))
-      fx = static_cast<float> (m >= 16 && std::isfinite (efx) && efx > 1.0 ? efx : fallback);
+      fx = fitted (efx);
     if (!(fy > 0.f))
-      fy = static_cast<float> (m >= 16 && std::isfinite (efy) && efy > 1.0 ? efy : fallback);
+      fy = fitted (efy);
   }
   scan.fx = fx;
   scan.fy = fy;
@@ -503,8 +529,10 @@ agex::PersonSegmentation<PointT>::buildCoarseGrid (detail::PersonScan &scan) con
 {
   const int width = scan.width, height = scan.height;
   const float fx = scan.fx, fy = scan.fy;
-  const int step = coarse_step_ > 0 ? coarse_step_
-                                    : std::max (1, static_cast<int> (std::lround (kAutoCellAngle * std::min (fx, fy))));
+  // The automatic step is bounded as a given one is (0-64), before it becomes an int.
+  const int step = coarse_step_ > 0
+                       ? coarse_step_
+                       : clampedInt (std::round (kAutoCellAngle * std::min (fx, fy)), 1, 64);
   scan.step = step;
   const int cw = (width + step - 1) / step, ch = (height + step - 1) / step;
   scan.cw = cw;
@@ -736,8 +764,8 @@ agex::PersonSegmentation<PointT>::measureBins (const detail::PersonScan &scan,
   const float base_band = 0.1f;
   const float crown_drop = crown_drop_ + 2.f * depth_noise_ * s.zMean () * s.zMean ();
   detail::forEachPartCell (scan, parts, [&] (const detail::PersonPart &part, int c, const detail::PersonGridCell &g) {
-    const int bl = std::min (nlat - 1, static_cast<int> ((g.lat - s.lat_min) / s.bin));
-    const int bf = std::min (nfwd - 1, static_cast<int> ((g.fwd - s.fwd_min) / s.bin));
+    const int bl = detail::binIndex (g.lat, s.lat_min, s.bin, nlat);
+    const int bf = detail::binIndex (g.fwd, s.fwd_min, s.bin, nfwd);
     ++s.column[bl];
     const int cu = c % scan.cw;
     column_first[bl] = std::min (column_first[bl], cu);
@@ -954,7 +982,8 @@ agex::PersonSegmentation<PointT>::headCuts (const detail::PersonScan &scan, cons
   constexpr float kInf = std::numeric_limits<float>::infinity ();
   const auto &profile = s.profile;
   const int nb = static_cast<int> (profile.size ());
-  const int window = std::max (1, static_cast<int> (std::ceil (0.5f * min_head_distance_ / s.bin)));
+  // At most the profile's length: a huge head distance must not overflow the int.
+  const int window = clampedInt (std::ceil (0.5f * min_head_distance_ / s.bin), 1, std::max (1, nb));
   std::vector<int> peaks;
   for (int b = 0; b < nb; ++b)
   {

@@ -28,6 +28,7 @@
 #include <optional>
 #include <sstream>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include <dlfcn.h>
@@ -95,29 +96,62 @@ toPython (const nlohmann::json &j)
   }
 }
 
-/** Python's own value as JSON (settings given as keyword arguments). */
+/** Nesting a setting may have: far more than any setting needs (a point is one list), and
+  * far less than what exhausts the stack (a list that holds itself nests without end). */
+constexpr int kMaxSettingDepth = 64;
+
+/** Python's own value as JSON (settings given as keyword arguments).
+  * \throws std::invalid_argument (ValueError) naming the setting: a value of another type,
+  *         an int beyond 64 bits, a list nested deeper than kMaxSettingDepth */
 nlohmann::json
-toJson (const py::handle &o, const std::string &key)
+toJson (const py::handle &o, const std::string &key, int depth = 0)
 {
   if (py::isinstance<py::bool_> (o))
     return o.cast<bool> ();
   if (py::isinstance<py::int_> (o))
-    return o.cast<long long> ();
+  {
+    // Casting an int beyond 64 bits would throw pybind11's bare RuntimeError.
+    const long long value = PyLong_AsLongLong (o.ptr ());
+    if (value == -1 && PyErr_Occurred ())
+    {
+      PyErr_Clear ();
+      throw std::invalid_argument (key + ": " + py::repr (o).cast<std::string> () +
+                                   " does not fit a 64-bit integer");
+    }
+    return value;
+  }
   if (py::isinstance<py::float_> (o))
     return o.cast<double> ();
   if (py::isinstance<py::str> (o))
     return o.cast<std::string> ();
   if (py::isinstance<py::sequence> (o))
   {
+    if (depth >= kMaxSettingDepth)
+      throw std::invalid_argument (key + ": lists nested more than " + std::to_string (kMaxSettingDepth) +
+                                   " deep (or a list that contains itself)");
     nlohmann::json list = nlohmann::json::array ();
     for (const auto &item : o.cast<py::sequence> ())
-      list.push_back (toJson (item, key));
+      list.push_back (toJson (item, key, depth + 1));
     return list;
   }
   if (py::hasattr (o, "tolist"))  // a numpy array or scalar
-    return toJson (o.attr ("tolist") (), key);
+  {
+    if (depth >= kMaxSettingDepth)
+      throw std::invalid_argument (key + ": nested more than " + std::to_string (kMaxSettingDepth) + " deep");
+    return toJson (o.attr ("tolist") (), key, depth + 1);
+  }
   throw std::invalid_argument (key + ": expected a number, a bool, a string or a list, got " +
                                py::str (py::type::handle_of (o)).cast<std::string> ());
+}
+
+/** A path as the C++ side reads it: one with a NUL would be read up to the NUL, another file. */
+const std::string &
+checkedPath (const char *name, const std::string &path)
+{
+  if (path.find ('\0') != std::string::npos)
+    throw std::invalid_argument (std::string (name) + ": the path contains a NUL character: " +
+                                 py::repr (py::str (path)).cast<std::string> ());
+  return path;
 }
 
 py::dict
@@ -193,6 +227,15 @@ shapeText (const py::array &a)
   return text.str ();
 }
 
+/** Refuses an intrinsic or depth scale as the apps' flags do (agex::intrinsicProblem), naming it. */
+void
+checkIntrinsic (const char *name, agex::IntrinsicKind kind, double value)
+{
+  const std::string problem = agex::intrinsicProblem (kind, value);
+  if (!problem.empty ())
+    throw std::invalid_argument (std::string (name) + " " + problem);
+}
+
 /** \brief A frame from a depth array: uint16 (default millimetres), float32 (default metres)
   * or uint8 (depth_scale required), read in place when its rows are contiguous, else copied.
   * The back-projection runs without the GIL.
@@ -201,6 +244,10 @@ std::shared_ptr<PyFrame>
 frameFromArray (const py::array &input, double fx, double fy, double cx, double cy, std::optional<double> depth_scale)
 {
   py::array depth = input;
+  // A masked array's masked pixels are invalid depth (0 in every dtype), not the data under the mask.
+  const py::module_ ma = py::module_::import ("numpy.ma");
+  if (py::isinstance (input, ma.attr ("MaskedArray")))
+    depth = py::array (ma.attr ("filled") (input, 0));
   int type = -1;
   double default_scale = 0.0;
   if (depth.dtype ().is (py::dtype::of<std::uint16_t> ()))
@@ -227,10 +274,9 @@ frameFromArray (const py::array &input, double fx, double fy, double cx, double 
   const double scale = depth_scale ? *depth_scale : default_scale;
   if (type == CV_8U && !depth_scale)
     throw std::invalid_argument ("uint8 depth needs depth_scale (metres per unit); 8-bit depth has no common unit");
-  if (!(scale > 0.0) || !std::isfinite (scale))
-    throw std::invalid_argument ("depth_scale must be a positive number of metres per depth unit");
-  if (!(fx > 0.0) || !(fy > 0.0) || !std::isfinite (fx) || !std::isfinite (fy))
-    throw std::invalid_argument ("fx and fy must be positive focal lengths in pixels");
+  checkIntrinsic ("depth_scale", agex::IntrinsicKind::kDepthScale, scale);
+  checkIntrinsic ("fx", agex::IntrinsicKind::kFocalLength, fx);
+  checkIntrinsic ("fy", agex::IntrinsicKind::kFocalLength, fy);
   const auto rows = depth.shape (0), cols = depth.shape (1);
   if (!(cx >= -0.5 && cx <= cols - 0.5) || !(cy >= -0.5 && cy <= rows - 0.5))
   {
@@ -267,22 +313,24 @@ loadFrame (const std::string &path, std::optional<double> fx, std::optional<doub
 {
   agex::FrameOptions options;
   // As the apps' --fx ... --cy: intrinsics given are meant for the frame at hand, whatever its size.
-  for (const auto &[value, field] : {std::make_pair (fx, &agex::CameraIntrinsics::fx), std::make_pair (fy, &agex::CameraIntrinsics::fy),
-                                     std::make_pair (cx, &agex::CameraIntrinsics::cx), std::make_pair (cy, &agex::CameraIntrinsics::cy)})
+  using agex::IntrinsicKind;
+  for (const auto &[name, value, field, kind] :
+       {std::make_tuple ("fx", fx, &agex::CameraIntrinsics::fx, IntrinsicKind::kFocalLength),
+        std::make_tuple ("fy", fy, &agex::CameraIntrinsics::fy, IntrinsicKind::kFocalLength),
+        std::make_tuple ("cx", cx, &agex::CameraIntrinsics::cx, IntrinsicKind::kPrincipalPoint),
+        std::make_tuple ("cy", cy, &agex::CameraIntrinsics::cy, IntrinsicKind::kPrincipalPoint)})
     if (value)
     {
-      if (!std::isfinite (*value))
-        throw std::invalid_argument ("fx, fy, cx and cy must be finite numbers");
+      checkIntrinsic (name, kind, *value);
       options.intrinsics.*field = *value;
       options.intrinsics_width = options.intrinsics_height = 0;
     }
-  if ((fx && !(*fx > 0.0)) || (fy && !(*fy > 0.0)))
-    throw std::invalid_argument ("fx and fy must be positive focal lengths in pixels");
-  if (depth_scale && !(*depth_scale > 0.0 && std::isfinite (*depth_scale)))
-    throw std::invalid_argument ("depth_scale must be a positive number of metres per depth unit");
+  if (depth_scale)
+    checkIntrinsic ("depth_scale", IntrinsicKind::kDepthScale, *depth_scale);
   options.depth_scale = depth_scale.value_or (0.0);
   options.width = width;
   options.height = height;
+  checkedPath ("path", path);
   auto result = std::make_shared<PyFrame> ();
   py::gil_scoped_release release;
   result->frame = agex::loadFrame (path, options);
@@ -316,7 +364,9 @@ public:
   PyDetector (std::optional<std::string> model, std::optional<std::string> forest, std::optional<std::string> mode,
               int forest_stride)
   {
-    const std::string model_path = model ? *model : bundledDataFile ("models/agex_bonn.yml");
+    const std::string model_path = model ? checkedPath ("model", *model) : bundledDataFile ("models/agex_bonn.yml");
+    if (forest)
+      checkedPath ("forest", *forest);
     if (mode && *mode != "model" && *mode != "forest")
       throw std::invalid_argument ("mode must be 'model' (the model's classifier) or 'forest' (the forest's part "
                                    "modes alone); got '" + *mode + "'");
@@ -497,6 +547,7 @@ agexKeypoints (const py::object &depth, std::optional<double> fx, std::optional<
   agex::DepthPipelineParams params;
   if (model)
   {
+    checkedPath ("model", *model);
     py::gil_scoped_release release;
     params = agex::DetectorModel::load (*model).settings ().pipeline;
   }
@@ -505,7 +556,12 @@ agexKeypoints (const py::object &depth, std::optional<double> fx, std::optional<
   {
     const std::string name = py::str (key).cast<std::string> ();
     if (name == "naive")
-      params.naive = value.cast<bool> ();
+    {
+      const nlohmann::json naive = toJson (value, name);
+      if (!naive.is_boolean ())
+        throw std::invalid_argument ("naive: expected True or False, got " + py::repr (value).cast<std::string> ());
+      params.naive = naive.get<bool> ();
+    }
     else if (!doc.contains (name))
     {
       std::string keys;

@@ -144,7 +144,7 @@ def test_bad_intrinsics_and_settings_are_refused(detector):
         detector.detect(depth)
     with pytest.raises(ValueError, match="principal point"):
         detector.detect(depth, 100.0, 100.0, 500.0, 24.0)
-    with pytest.raises(ValueError, match="positive focal lengths"):
+    with pytest.raises(ValueError, match="fx must be a focal length of"):
         detector.detect(depth, 0.0, 100.0, 32.0, 24.0)
     with pytest.raises(ValueError, match="depth_scale"):
         detector.detect(np.zeros((48, 64), np.uint8), 100.0, 100.0, 32.0, 24.0)
@@ -154,6 +154,66 @@ def test_bad_intrinsics_and_settings_are_refused(detector):
         agex.BodyPartDetector(mode="sliding")
     # An empty, all-invalid frame: no detections, no error.
     assert detector.detect(np.zeros((48, 64), np.uint16), 100.0, 100.0, 32.0, 24.0) == []
+
+
+def test_absurd_intrinsics_and_depths_are_refused_or_give_nothing(detector):
+    # Focal lengths of 1e-8 px (a crash in the person segmentation once), 1e39 (no detections
+    # without a word) and a principal point beyond a float are refused, naming the value.
+    depth = np.full((480, 640), 1500, np.uint16)
+    for f in (1e-8, 1e-6, 1e39):
+        with pytest.raises(ValueError, match="fx must be a focal length of 0.001 to 1e"):
+            detector.detect(depth, f, 525.0, 319.5, 239.5)
+        with pytest.raises(ValueError, match="fy must be a focal length"):
+            agex.Frame(depth, 525.0, f, 319.5, 239.5)
+    with pytest.raises(ValueError, match="fx must be a focal length"):
+        agex.load_frame(FRAME, fx=1e-6, fy=525.0, cx=319.5, cy=239.5)
+    with pytest.raises(ValueError, match="depth_scale must be a positive number"):
+        detector.detect(depth, **KINECT, depth_scale=1e39)
+    # Depths of 3.4e38 m: a frame of nothing to find, not a crash.
+    assert detector.detect(np.full((480, 640), 3.4e38, np.float32), **KINECT) == []
+    assert agex.agex_keypoints(np.full((480, 640), 3.4e38, np.float32), **KINECT) == []
+
+
+def test_a_masked_array_is_invalid_where_masked(detector, grey):
+    everything = np.ma.masked_array(grey, mask=np.ones(grey.shape, bool))
+    assert detector.detect(everything, **KINECT, depth_scale=BONN_SCALE) == []
+    frame = agex.Frame(everything, **KINECT, depth_scale=BONN_SCALE)
+    assert np.isnan(frame.depth).all()
+    nothing = np.ma.masked_array(grey, mask=np.zeros(grey.shape, bool))
+    assert detector.detect(nothing, **KINECT, depth_scale=BONN_SCALE) == detector.detect(
+        grey, **KINECT, depth_scale=BONN_SCALE)
+    half = np.ma.masked_array(grey, mask=np.zeros(grey.shape, bool))
+    half[:, :320] = np.ma.masked
+    assert np.isnan(agex.Frame(half, **KINECT, depth_scale=BONN_SCALE).depth[:, :320]).all()
+
+
+def test_paths_with_a_nul_are_refused(tmp_path):
+    with pytest.raises(ValueError, match="path contains a NUL"):
+        agex.load_frame(FRAME + "\0junk.png")
+    model = agex.bundled_data_file("models/agex_bonn.yml")
+    with pytest.raises(ValueError, match="model: the path contains a NUL"):
+        agex.BodyPartDetector(model=model + "\0evil")
+    with pytest.raises(ValueError, match="forest: the path contains a NUL"):
+        agex.BodyPartDetector(forest="forest.agexforest\0evil")
+    with pytest.raises(ValueError, match="model: the path contains a NUL"):
+        agex.agex_keypoints(agex.load_frame(FRAME), model=model + "\0evil")
+
+
+def test_bad_setting_values_name_the_setting():
+    frame = agex.load_frame(FRAME)
+    looped = [0.0, 0.0]
+    looped.append(looped)
+    with pytest.raises(ValueError, match="crop_min: lists nested more than 64 deep"):
+        agex.agex_keypoints(frame, use_crop_box=True, crop_min=looped)
+    deep = [0.0]
+    for _ in range(50000):
+        deep = [deep]
+    with pytest.raises(ValueError, match="crop_min: lists nested more than 64 deep"):
+        agex.agex_keypoints(frame, use_crop_box=True, crop_min=deep)
+    with pytest.raises(ValueError, match="k: 9223372036854775808 does not fit a 64-bit integer"):
+        agex.agex_keypoints(frame, k=2**63)
+    with pytest.raises(ValueError, match="naive: expected True or False, got 'yes'"):
+        agex.agex_keypoints(frame, naive="yes")
 
 
 def test_file_errors_carry_the_apps_messages(tmp_path):

@@ -34,4 +34,4 @@ check "a focal length finite only as a double" 1 "--fx must be a focal length of
 check "a principal point beyond a float" 1 "--cy must be a number of pixels finite as a float" \
   $D in/frame.png --cy 1e39
 check "a forest made for a 1 px camera" 1 "focal_1.agexforest: the reference focal length 1 px lies outside 10 to" \
-  $D in/frame.png --mode forest --forest in/focal_1.agexforest --json out/a.json
+  $D in/frame.png --detector-mode forest --forest in/focal_1.agexforest --json out/a.json

@@ -403,8 +403,10 @@ replayAtRate (FrameSource::Ptr source, double fps)
 {
   if (!source)
     throw std::invalid_argument ("replayAtRate needs a source");
-  if (!(fps > 0.0 && fps <= 10000.0))
-    throw std::invalid_argument ("a replay's frame rate must lie in (0, 10000] frames per second");
+  // Slower than one frame in ten seconds is a stalled stream, not a replay; so slow a rate
+  // also overflowed the schedule's clock (1e-10 ran at full speed, 1e-9 waited 31 years).
+  if (!(fps >= kMinReplayFps && fps <= kMaxReplayFps))
+    throw std::invalid_argument ("a replay's frame rate must lie in [0.1, 1000] frames per second");
   return std::make_unique<ReplaySource> (std::move (source), fps);
 }
 }  // namespace agex

@@ -274,7 +274,7 @@ check "--device openni2:#9 (no such camera)" 1 "(no depth camera|cannot open the
 [ ! -e out/live.jsonl ] || { echo "FAILED: a run without a camera left out/live.jsonl" >&2; failures=$((failures + 1)); }
 check "--device kinect2" 1 "--device takes openni2, openni2:URI .* or replay:PATH" $D --device kinect2
 check "--device replay: of a missing directory" 1 "missing: no such file or directory" $D --device replay:in/missing
-check "--device replay:in/batch --fps 0" 1 "--fps must lie in \\(0, 10000\\]" $D --device replay:in/batch --fps 0
+check "--device replay:in/batch --fps 0" 1 "--fps must lie in \\[0.1, 1000\\]" $D --device replay:in/batch --fps 0
 check "agex_eval coverage under --shard" 1 "only agex_eval detect shares its frames" $E coverage --dataset in/dataset --shard 0/2
 check "agex_eval detect with a pipeline flag" 1 "--spur-iterations applies to agex_eval coverage, not to agex_eval 'detect'" \
   $E detect --dataset in/dataset --spur-iterations 0 --json out/d.json

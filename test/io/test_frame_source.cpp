@@ -231,8 +231,8 @@ TEST (ReplaySource, ASlowConsumerLosesFramesAndTheyAreCounted)
 TEST (ReplaySource, StopsFromAnotherThreadWhileTheConsumerWaits)
 {
   TempDir dir;
-  // One frame per 100 s: the consumer would wait for the second one.
-  auto source = agex::replayAtRate (agex::openFrameDirectory (frameDirectory (dir, 3), smallFrameOptions ()), 0.01);
+  // One frame per 10 s (the slowest rate): the consumer would wait for the second one.
+  auto source = agex::replayAtRate (agex::openFrameDirectory (frameDirectory (dir, 3), smallFrameOptions ()), 0.1);
   agex::SourceFrame frame;
   ASSERT_TRUE (source->next (frame));
   auto waiting = std::async (std::launch::async, [&] { return source->next (frame); });
@@ -262,6 +262,18 @@ TEST (ReplaySource, ABadFrameIsReportedAfterTheGoodOnes)
     EXPECT_NE (std::string (e.what ()).find ("002.png"), std::string::npos) << e.what ();
   }
   EXPECT_THROW (agex::replayAtRate (agex::openFrameDirectory (frames, smallFrameOptions ()), 0.0), std::invalid_argument);
+}
+
+TEST (ReplaySource, RatesWhoseScheduleOverflowsAreRefused)
+{
+  TempDir dir;
+  const std::string frames = frameDirectory (dir, 2);
+  // 1e-10 fps ran at full speed (frame i's due time overflowed), 1e-9 waited 31 years a frame.
+  for (const double fps : {1e-10, 1e-9, 5e-324, 0.099, 1000.5, 1e300})
+    EXPECT_THROW (agex::replayAtRate (agex::openFrameDirectory (frames, smallFrameOptions ()), fps), std::invalid_argument)
+        << fps;
+  EXPECT_NO_THROW (agex::replayAtRate (agex::openFrameDirectory (frames, smallFrameOptions ()), agex::kMinReplayFps));
+  EXPECT_NO_THROW (agex::replayAtRate (agex::openFrameDirectory (frames, smallFrameOptions ()), agex::kMaxReplayFps));
 }
 
 TEST (OpenNI2Source, WithoutACameraSaysWhatItTried)

@@ -112,8 +112,8 @@ int
 runLiveDetection (const std::string &device, double fps, const FrameOptions &options, const std::string &json_path,
                   int threads, const std::string &app, const std::function<nlohmann::json (const SourceFrame &)> &process)
 {
-  if (!(fps > 0.0 && fps <= 10000.0))
-    throw std::runtime_error ("--fps must lie in (0, 10000]");
+  if (!(fps >= kMinReplayFps && fps <= kMaxReplayFps))
+    throw std::runtime_error ("--fps must lie in [0.1, 1000] frames per second");
   // Before the source starts its threads, so that they leave the signals to the watcher.
   StopOnSignals stop (app);
   std::unique_ptr<ResultsFile> results;

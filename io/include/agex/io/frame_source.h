@@ -92,12 +92,15 @@ FrameSource::Ptr openImageSequence (const std::string &pattern, const FrameOptio
   * \throws FrameError (DatasetError for a dataset) naming spec */
 FrameSource::Ptr openFrames (const std::string &spec, const FrameOptions &options = FrameOptions ());
 
+/** The frame rates a replay takes (frames per second). */
+constexpr double kMinReplayFps = 0.1, kMaxReplayFps = 1000.0;
+
 /** \brief Replays another source at a set frame rate, as a camera would deliver it: frame i
   * is offered i / fps seconds after the start (its timestamp), whether or not the consumer
   * took frame i - 1; an untaken frame is replaced and counted in dropped (). The replay ends
   * with its source; an error of the source is thrown by next () once the frames before it
   * are taken. Testing and timing a live consumer needs no camera.
-  * \throws std::invalid_argument unless fps is positive and at most 10000 */
+  * \throws std::invalid_argument unless fps lies in [kMinReplayFps, kMaxReplayFps] */
 FrameSource::Ptr replayAtRate (FrameSource::Ptr source, double fps);
 
 /** Whether this agex was built with OpenNI2 support (PCL's io built with OpenNI2, and its

@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <limits>
 #include <map>
 #include <stdexcept>
 
@@ -160,12 +162,23 @@ PersonEvaluation::fromState (const nlohmann::json &doc, const std::string &sourc
       if (e.persons_[b] < 0 || e.found_[b] < 0 || e.found_[b] > e.persons_[b] || e.found_firing_[b] < 0 ||
           e.found_firing_[b] > e.found_[b])
         throw std::invalid_argument (source + ": malformed person evaluation state (person counts out of range)");
-    e.frames_ = doc.at ("frames").get<int> ();
-    e.frames_with_person_images_ = doc.at ("frames_with_person_images").get<int> ();
-    e.non_person_detections_ = doc.at ("non_person_detections").get<int> ();
+    // Counts read as what they are: a number past int would wrap to another count.
+    const auto count = [&] (const char *key) {
+      const auto &value = doc.at (key);
+      if (!value.is_number_integer () || value.get<std::int64_t> () < 0 ||
+          value.get<std::int64_t> () > std::numeric_limits<int>::max ())
+        throw std::invalid_argument (source + ": person evaluation state \"" + key +
+                                     "\" must be a whole number from 0 to " +
+                                     std::to_string (std::numeric_limits<int>::max ()));
+      return value.get<int> ();
+    };
+    e.frames_ = count ("frames");
+    e.frames_with_person_images_ = count ("frames_with_person_images");
+    e.non_person_detections_ = count ("non_person_detections");
     const auto &bands = doc.at ("bands");
     if (!bands.is_array () || bands.size () != kBands)
-      throw std::invalid_argument ("bands");
+      throw std::invalid_argument (source + ": person evaluation state \"bands\" must be a list of " +
+                                   std::to_string (kBands) + " distance bands");
     for (int b = 0; b < kBands; ++b)
       e.bands_[b] = DetectionEvaluation::fromState (bands[b], source);
     return e;

@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include <fstream>
+#include <functional>
 
 namespace
 {
@@ -50,7 +51,7 @@ TEST (Shard, BlocksCoverTheFramesInOrderEachOnce)
 std::string
 line (const std::string &frame, int index, int frames, const std::string &extra = "1")
 {
-  nlohmann::json doc = {{"frame", frame}, {"detections", nlohmann::json::array ()}, {"x", extra}};
+  nlohmann::json doc = {{"frame", frame}, {"width", 64}, {"height", 48}, {"detections", nlohmann::json::array ()}, {"x", extra}};
   if (index >= 0)
     doc["batch"] = {{"index", index}, {"frames", frames}};
   return doc.dump () + "\n";
@@ -116,6 +117,23 @@ TEST (MergeResultParts, RefusesPartsOfOtherRunsMissingFramesAndForeignFiles)
   refused ({dir.file ("a.jsonl"), dir.file ("notes.txt")}, "notes.txt: line 1 is not a frame result");
   refused ({}, "--merge needs the parts");
   refused ({dir.file ("a.jsonl"), dir.file ("missing.jsonl")}, "missing.jsonl");
+  // Lines with a "frame" that are not whole results: each named by file and line.
+  const auto edited = [&] (const std::string &name, const std::function<void (nlohmann::json &)> &edit) {
+    nlohmann::json doc = nlohmann::json::parse (line ("d/c", 2, 3));
+    edit (doc);
+    writeAll (dir.file (name), doc.dump () + "\n");
+    return dir.file (name);
+  };
+  refused ({dir.file ("a.jsonl"), edited ("empty_frame.jsonl", [] (auto &d) { d["frame"] = ""; })},
+           "empty_frame.jsonl: line 1: \"frame\" is empty");
+  refused ({dir.file ("a.jsonl"), edited ("none.jsonl", [] (auto &d) { d["detections"] = "none"; })},
+           "none.jsonl: line 1: \"detections\" must be a list");
+  refused ({dir.file ("a.jsonl"), edited ("no_detections.jsonl", [] (auto &d) { d.erase ("detections"); })},
+           "no_detections.jsonl: line 1: \"detections\" must be a list");
+  refused ({dir.file ("a.jsonl"), edited ("bad_entry.jsonl", [] (auto &d) { d["detections"] = {1, 2}; })},
+           "bad_entry.jsonl: line 1: \"detections\" holds an entry that is not a detection");
+  refused ({dir.file ("a.jsonl"), edited ("no_size.jsonl", [] (auto &d) { d["width"] = -3; })},
+           "no_size.jsonl: line 1: \"width\" must be a positive whole number");
   // A torn last line (a killed shard) is skipped: the frames before it count.
   agex::apps::mergeResultParts ({dir.file ("a.jsonl"), dir.file ("torn.jsonl")}, out, "agex_detect");
   EXPECT_EQ (framesOf (out), (std::vector<std::string>{"d/a:1", "d/b:1", "d/c:1"}));

@@ -41,6 +41,28 @@ struct ResultLine
 
 /** The frame results of a JSON-lines results file. A torn last line (an interrupted run) is
   * skipped with a warning; any other line that is not a frame result is refused. */
+/** What makes a line with a "frame" no whole frame result of agex_detect (what a merge would
+  * pass on as real: a frame without a name, detections that are not a list of detections);
+  * "" for a whole one. */
+std::string
+resultLineProblem (const nlohmann::json &doc)
+{
+  if (doc["frame"].get<std::string> ().empty ())
+    return "\"frame\" is empty";
+  for (const char *key : {"width", "height"})
+    if (!doc.contains (key) || !doc[key].is_number_unsigned () || doc[key].get<unsigned long long> () == 0)
+      return std::string ("\"") + key + "\" must be a positive whole number";
+  if (!doc.contains ("detections") || !doc["detections"].is_array ())
+    return "\"detections\" must be a list";
+  for (const auto &d : doc["detections"])
+    if (!d.is_object () || !d.contains ("class") || !d["class"].is_string () || !d.contains ("confidence") ||
+        !d["confidence"].is_number () || !d.contains ("pixel") || !d["pixel"].is_array ())
+      return "\"detections\" holds an entry that is not a detection (class, confidence, pixel)";
+  if (doc.contains ("persons") && !doc["persons"].is_array ())
+    return "\"persons\" must be a list";
+  return "";
+}
+
 std::vector<ResultLine>
 readResultLines (const std::string &path, const std::string &app)
 {
@@ -68,6 +90,10 @@ readResultLines (const std::string &path, const std::string &app)
       throw std::runtime_error (path + ": line " + std::to_string (number) + " is not a frame result of " + app +
                                 " (a JSON object with a \"frame\"); only results files can be merged");
     }
+    const std::string wrong = resultLineProblem (doc);
+    if (!wrong.empty ())
+      throw std::runtime_error (path + ": line " + std::to_string (number) + ": " + wrong +
+                                "; a frame result of " + app + " is not merged unless it is whole");
     ResultLine result;
     result.frame = doc["frame"].get<std::string> ();
     if (doc.contains ("batch"))

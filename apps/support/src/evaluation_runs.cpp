@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -339,7 +340,13 @@ mergeDetectionEvaluations (const std::vector<std::string> &parts, const std::str
         !doc["shard"].contains ("index") || !doc["shard"].contains ("count") ||
         !doc["shard"]["index"].is_number_integer () || !doc["shard"]["count"].is_number_integer ())
       throw std::runtime_error (path + ": not the report of an agex_eval detect --shard run (no \"shard\" and \"state\")");
-    const int index = doc["shard"]["index"].get<int> (), n = doc["shard"]["count"].get<int> ();
+    // Read wide: a count past int would wrap into one that looks plausible.
+    const std::int64_t index64 = doc["shard"]["index"].get<std::int64_t> (), n64 = doc["shard"]["count"].get<std::int64_t> ();
+    constexpr std::int64_t kMaxShards = 100000;  // as --shard allows
+    if (n64 < 1 || n64 > kMaxShards || index64 < 0 || index64 >= n64)
+      throw std::runtime_error (path + ": \"shard\" says part " + std::to_string (index64) + " of " + std::to_string (n64) +
+                                ", but a --shard run is part K of N with 0 <= K < N <= " + std::to_string (kMaxShards));
+    const int index = static_cast<int> (index64), n = static_cast<int> (n64);
     nlohmann::json run;
     for (const char *key : kRunKeys)
       if (doc.contains (key))

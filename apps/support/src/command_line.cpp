@@ -71,7 +71,10 @@ parseCommandLine (int argc, char **argv, const po::options_description &options,
                   const po::positional_options_description &positional, std::vector<std::string> *given)
 {
   po::variables_map vm;
-  po::store (po::command_line_parser (argc, argv).options (options).positional (positional).run (), vm);
+  // No guessing from a prefix: boost would take --mode for --model and read a file the user
+  // never named.
+  const int style = po::command_line_style::default_style & ~po::command_line_style::allow_guessing;
+  po::store (po::command_line_parser (argc, argv).options (options).positional (positional).style (style).run (), vm);
   if (vm.count ("help"))
   {
     std::cout << options << "\n";

@@ -13,7 +13,8 @@ namespace agex
 namespace apps
 {
 /** \brief Parses the command line into the variables bound in options and runs
-  * their notifiers. Prints the options and returns false when --help was given.
+  * their notifiers. Prints the options and returns false when --help was given. A flag is
+  * taken only by its whole name, never guessed from a prefix.
   * \throws boost::program_options::error on an unknown or malformed flag */
 bool parseCommandLine (int argc, char **argv, const boost::program_options::options_description &options,
                        const boost::program_options::positional_options_description &positional);

@@ -11,6 +11,7 @@
 #include <agex/apps/command_line.h>
 #include <agex/apps/dataset_selection.h>
 #include <agex/apps/output.h>
+#include <agex/apps/output_guard.h>
 #include <agex/io/atomic_file.h>
 
 #include <iostream>
@@ -33,7 +34,7 @@ main (int argc, char **argv)
         agex::InputFiles read (
             agex::apps::datasetFiles (agex::apps::selectDataset (flags.dataset_spec, false).dataset));
         read.add (flags.detector.model);
-        read.checkOutput (flags.json_path);
+        agex::apps::checkOutputPath (flags.json_path, "agex_bench report", agex::apps::benchReportRecogniser (), read);
       }
       doc = agex::apps::benchDataset (flags.dataset_spec, flags.keyframes_only,
                                       agex::apps::loadDetector (flags.detector), flags.passes, flags.jobs);
@@ -44,9 +45,9 @@ main (int argc, char **argv)
         flags.inputs.push_back (AGEX_BUNDLED_FRAME);
       if (!flags.json_path.empty ())
       {
-        std::vector<std::string> read = flags.inputs;
-        read.push_back (flags.detector.model);
-        agex::checkOutputIsNotInput (flags.json_path, read);
+        agex::InputFiles read (flags.inputs);
+        read.add (flags.detector.model);
+        agex::apps::checkOutputPath (flags.json_path, "agex_bench report", agex::apps::benchReportRecogniser (), read);
       }
       doc = agex::apps::benchFrames (flags.inputs, flags.frame_options, flags.params, flags.k, flags.repeat,
                                      !flags.no_portrait);

@@ -54,11 +54,14 @@ main (int argc, char **argv)
     const agex::DepthPipelineResult result = agex::runDepthPipeline (frame.cloud, params);
 
     const nlohmann::json doc = agex::apps::keypointsJson (input, *frame.cloud, result);
-    if (!json_path.empty ())
-      agex::apps::writeJson (json_path, doc);
-    if (!overlay_path.empty ())
-      agex::apps::writePng (overlay_path,
-                            agex::apps::renderOverlay (*frame.cloud, result.meshes, result.interest_points));
+    {
+      const agex::apps::OutputSetClaim claim ({json_path, overlay_path});  // written as one set
+      if (!json_path.empty ())
+        agex::apps::writeJson (json_path, doc);
+      if (!overlay_path.empty ())
+        agex::apps::writePng (overlay_path,
+                              agex::apps::renderOverlay (*frame.cloud, result.meshes, result.interest_points));
+    }
 
     // The summary goes to standard error: without --json, standard output is the JSON alone.
     std::cerr << input << ": " << result.meshes.size () << " meshes, " << result.interest_points.size ()

@@ -30,7 +30,7 @@ main (int argc, char **argv)
     ("json-lines", po::value (&lines_path), "write one JSON line per image or frame here ('-': standard output, "
      "as each frame is done)")
     ("overlay", po::value (&overlay_path), "write an overlay PNG here (the last image or frame)")
-    ("video", po::value (&video), "a video file, or a camera number, processed frame by frame until its end, "
+    ("video", po::value (&video), "a video file, an image sequence (frames/f%04d.png) or a camera number, processed frame by frame until its end, "
      "--max-frames or Ctrl-C (the outputs are written then)")
     ("max-frames", po::value (&max_frames)->default_value (0), "stop a video after this many frames (0: all)")
     ("repeat", po::value (&repeat)->default_value (repeat),

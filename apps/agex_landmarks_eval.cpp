@@ -4,6 +4,7 @@
 #include <agex/apps/command_line.h>
 #include <agex/apps/landmarks.h>
 #include <agex/apps/output.h>
+#include <agex/apps/output_guard.h>
 #include <agex/landmarks/landmark_evaluation.h>
 #include <agex/landmarks/people_landmarks.h>
 
@@ -24,11 +25,14 @@ main (int argc, char **argv)
     agex::apps::checkLandmarkEvaluationFlags (flags);
     const agex::apps::LandmarkInputs inputs =
       agex::apps::loadLandmarkInputs (flags.datasets, flags.train_also, {flags.model, flags.detector.path}, {flags.json});
+    if (!flags.json.empty ())
+      agex::apps::checkOutputPath (flags.json, "agex_landmarks_eval report",
+                                   agex::apps::jsonReportWith ({"dataset", "detector"}), inputs.read);
     const bool train_detector = flags.train_detector && !flags.detector.none;
     std::unique_ptr<agex::PeopleDetector> detector;
     if (!flags.detector.none && !flags.train_detector)
       detector = std::make_unique<agex::PeopleDetector> (agex::apps::loadPeopleDetector (flags.detector));
-    const agex::ScoredImageCallback overlays = agex::apps::landmarkOverlayWriter (flags.overlay_dir, inputs.read);
+    const agex::ScoredImageCallback overlays = agex::apps::landmarkOverlayWriter (flags.overlay_dir, inputs);
 
     nlohmann::json doc;
     if (flags.folds == 0)

@@ -37,7 +37,9 @@ main (int argc, char **argv)
     if (!detector_path.empty () &&
         std::filesystem::weakly_canonical (detector_path) == std::filesystem::weakly_canonical (model_path))
       throw std::runtime_error (detector_path + ": --detector-out and --out name the same file");
-    const auto images = agex::apps::loadLandmarkInputs (dataset_paths, {}, {}, {model_path, detector_path}).images;
+    const agex::apps::LandmarkInputs inputs = agex::apps::loadLandmarkInputs (dataset_paths, {}, {}, {model_path, detector_path});
+    agex::apps::checkLandmarkModelOutputs (model_path, detector_path, inputs.read);
+    const auto &images = inputs.images;
     std::vector<std::size_t> all_images (images.size ());
     std::iota (all_images.begin (), all_images.end (), 0);
     std::size_t people = 0;

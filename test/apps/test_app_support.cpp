@@ -23,6 +23,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <set>
 #include <thread>
 
@@ -163,6 +164,79 @@ TEST (OutputGuard, FilesReplacedOnlyWhenTheyAreEarlierOutputsOfTheirKind)
   expectRefusal ([&] { agex::apps::checkOutputPath (ds + "/new.json", OutputKind::JsonDocument, inputs); },
                  {"new.json", "would land inside the input dataset"});
   EXPECT_EQ (readAll (text), "my notes\n");
+}
+
+TEST (OutputGuard, ReportsModelsAndDatasetsRecognisedByTheirContent)
+{
+  TempDir tmp;
+  const agex::InputFiles inputs;
+  const std::string notes = tmp.file ("notes.txt"), config = tmp.file ("config.json");
+  writeAll (notes, "my notes\n");
+  writeAll (config, "{\"threads\": 4}\n");  // a JSON object of someone else's
+  const auto report = agex::apps::jsonReportWith ({"frames", "detector"});
+  writeAll (tmp.file ("r.json"), "{\"frames\": [], \"detector\": \"fhog\", \"model\": \"m\"}");
+  EXPECT_NO_THROW (agex::apps::checkOutputPath (tmp.file ("r.json"), "report", report, inputs));
+  expectRefusal ([&] { agex::apps::checkOutputPath (config, "report", report, inputs); },
+                 {config, "without \"frames\"", "(report)"});
+  expectRefusal ([&] { agex::apps::checkOutputPath (notes, "report", report, inputs); }, {notes, "not a JSON object"});
+
+  const auto lines = agex::apps::jsonLinesWith ({"source", "people"});
+  writeAll (tmp.file ("l.jsonl"), "{\"source\": \"a\", \"people\": []}\n{\"source\": \"b\", \"people\": []}\n");
+  writeAll (tmp.file ("mixed.jsonl"), "{\"source\": \"a\", \"people\": []}\nmy notes\n");
+  EXPECT_NO_THROW (agex::apps::checkOutputPath (tmp.file ("l.jsonl"), "lines", lines, inputs));
+  expectRefusal ([&] { agex::apps::checkOutputPath (tmp.file ("mixed.jsonl"), "lines", lines, inputs); }, {"line 2"});
+  expectRefusal ([&] { agex::apps::checkOutputPath (config, "lines", lines, inputs); }, {"line 1"});
+
+  writeAll (tmp.file ("model.yml"), "%YAML:1.0\n---\nformat: agex-model\nformat_version: 2\n");
+  writeAll (tmp.file ("other.yml"), "%YAML:1.0\n---\nname: my settings\n");
+  EXPECT_NO_THROW (agex::apps::checkOutputPath (tmp.file ("model.yml"), OutputKind::Model, inputs));
+  expectRefusal ([&] { agex::apps::checkOutputPath (tmp.file ("other.yml"), OutputKind::Model, inputs); },
+                 {"other.yml", "is not an agex model"});
+
+  writeAll (tmp.file ("ours.xml"), "<?xml version='1.0'?>\n<dataset>\n<name>x</name>\n<comment>agex_annotate masks from m</comment>\n");
+  writeAll (tmp.file ("theirs.xml"), "<?xml version='1.0'?>\n<dataset>\n<name>hand-made</name>\n");
+  EXPECT_NO_THROW (agex::apps::checkOutputPath (tmp.file ("ours.xml"), OutputKind::ImglabXml, inputs));
+  expectRefusal ([&] { agex::apps::checkOutputPath (tmp.file ("theirs.xml"), OutputKind::ImglabXml, inputs); },
+                 {"theirs.xml", "not an imglab dataset written by agex_annotate"});
+  EXPECT_EQ (readAll (notes), "my notes\n");
+}
+
+TEST (OutputGuard, PngsInAFolderAreCheckedBeforeAnyIsWritten)
+{
+  TempDir tmp;
+  const std::string dir = tmp.file ("plots");
+  std::filesystem::create_directories (dir);
+  agex::apps::writePng (dir + "/a.png", cv::Mat (3, 3, CV_8UC3, cv::Scalar (1, 2, 3)));
+  writeAll (dir + "/b.png", pngBytes ());  // the user's own picture
+  const agex::InputFiles inputs;
+  EXPECT_NO_THROW (agex::apps::checkPngsInFolder ({dir + "/a.png", dir + "/new.png"}, inputs));
+  expectRefusal ([&] { agex::apps::checkPngsInFolder ({dir + "/a.png", dir + "/b.png"}, inputs); },
+                 {"b.png", "not a PNG written by agex"});
+  writeAll (tmp.file ("file"), "x");
+  expectRefusal ([&] { agex::apps::checkPngsInFolder ({tmp.file ("file") + "/a.png"}, inputs); }, {"is not a folder"});
+  EXPECT_EQ (readAll (dir + "/b.png"), pngBytes ());
+}
+
+TEST (OutputGuard, AClaimedSetIsWrittenByOneRunAtATime)
+{
+  TempDir tmp;
+  const std::string json = tmp.file ("j.json"), png = tmp.file ("sub/o.png");
+  std::filesystem::create_directories (tmp.file ("sub"));
+  std::atomic<bool> second_claimed{false};
+  std::thread second;
+  {
+    const agex::apps::OutputSetClaim claim ({json, png, ""});
+    second = std::thread ([&] {
+      const agex::apps::OutputSetClaim other ({png, json});  // the same folders, named in another order
+      second_claimed = true;
+    });
+    std::this_thread::sleep_for (std::chrono::milliseconds (200));
+    EXPECT_FALSE (second_claimed) << "a second claim on the same folders did not wait";
+  }
+  second.join ();
+  EXPECT_TRUE (second_claimed);
+  // Folders that do not exist (yet) or cannot be opened are no reason to fail.
+  EXPECT_NO_THROW (agex::apps::OutputSetClaim ({tmp.file ("missing/x.json")}));
 }
 
 TEST (ResultsFile, ResumesRepairsATornLineInPlaceAndRefusesForeignFiles)

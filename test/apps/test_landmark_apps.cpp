@@ -403,6 +403,39 @@ runCapturing (const std::string &command, const fs::path &dir, std::string *out,
 
 // Label maps (one person per image, excluded labels), instance masks in Penn-Fudan's layout
 // (STEM_mask.png, palette PNGs), and the masks that cannot be used, each named with its reason.
+// An image sequence whose frames change size (640x480, then 550x830): each frame gives the
+// people it gives as a still image (the later frames gave none when OpenCV's reader kept the
+// first frame's size).
+TEST (LandmarkApps, ImageSequenceFramesMayChangeSize)
+{
+  const fs::path dir = tempDir ("sequence_sizes");
+  const cv::Mat still = cv::imread (std::string (AGEX_SOURCE_DIR) + "/data/images/five_people.jpg");
+  ASSERT_FALSE (still.empty ());
+  cv::Mat tall;
+  cv::resize (still, tall, cv::Size (550, 830));
+  const std::string first = (dir / "t0.png").string (), second = (dir / "t1.png").string ();
+  ASSERT_TRUE (cv::imwrite (first, still));
+  ASSERT_TRUE (cv::imwrite (second, tall));
+  const std::string app = std::string (AGEX_LANDMARKS_EXECUTABLE) + " --opencv-detector";
+  const std::string from_video = (dir / "video.json").string (), from_stills = (dir / "stills.json").string ();
+  ASSERT_EQ (run (app + " --video " + (dir / "t%d.png").string () + " --json " + from_video), 0);
+  ASSERT_EQ (run (app + " " + first + " " + second + " --json " + from_stills), 0);
+  const nlohmann::json v = nlohmann::json::parse (readAll (from_video));
+  const nlohmann::json s = nlohmann::json::parse (readAll (from_stills));
+  ASSERT_EQ (v["frames"].size (), 2u);
+  for (std::size_t n = 0; n < 2; ++n)
+  {
+    ASSERT_EQ (v["frames"][n]["people"].size (), s["frames"][n]["people"].size ()) << "frame " << n;
+    for (std::size_t i = 0; i < v["frames"][n]["people"].size (); ++i)
+      EXPECT_EQ (v["frames"][n]["people"][i]["box"], s["frames"][n]["people"][i]["box"]);
+  }
+  EXPECT_GT (s["frames"][1]["people"].size (), 0u) << "the resized frame has no people to compare";
+  // A pattern with any other printf conversion is refused, not handed to a printf.
+  EXPECT_NE (run (app + " --video " + (dir / "t%s.png").string ()), 0);
+  EXPECT_NE (run (app + " --video " + (dir / "t%d%d.png").string ()), 0);
+  fs::remove_all (dir);
+}
+
 TEST (LandmarkApps, AnnotateMaskFolders)
 {
   const fs::path dir = tempDir ("masks");

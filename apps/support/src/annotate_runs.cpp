@@ -1,5 +1,7 @@
 #include <agex/apps/annotate_runs.h>
 
+#include <agex/apps/output_guard.h>
+
 #include <agex/apps/command_line.h>
 #include <agex/apps/landmark_annotation.h>
 #include <agex/apps/output.h>
@@ -47,7 +49,7 @@ rgbdImagePaths (const std::vector<std::string> &inputs, const std::string &image
     for (int n = 2; !taken.insert (name).second; ++n)
       name = stem + "-" + std::to_string (n) + ".png";
     pngs.push_back ((fs::path (images_dir) / name).string ());
-    read.checkOutput (pngs.back ());
+    checkOutputPath (pngs.back (), OutputKind::Png, read);
   }
   return pngs;
 }
@@ -105,7 +107,7 @@ annotateCoco (int argc, char **argv)
     named.insert (image.file);
     read.add ((fs::path (images_dir) / image.file).string ());
   }
-  read.checkOutput (output.out);
+  checkAnnotateOutputs (output, std::vector<std::string> (named.begin (), named.end ()), read);
   for (const std::string &file : only)
     if (!named.count (file))
       throw std::runtime_error ("--only " + file + ": no image with that file_name in " + json_path);
@@ -172,7 +174,7 @@ annotateMasks (int argc, char **argv)
     read.add (pair.mask);
     names.insert (fs::path (pair.image).filename ().string ());
   }
-  read.checkOutput (output.out);
+  checkAnnotateOutputs (output, std::vector<std::string> (names.begin (), names.end ()), read);
   for (const std::string &file : only.empty () ? skip : only)
     if (!names.count (file))
       throw std::runtime_error (file + ": no image of that name with a mask in " + images_dir);
@@ -253,6 +255,7 @@ annotateRgbd (int argc, char **argv)
   InputFiles protected_files = read;
   for (const std::string &png : pngs)
     protected_files.add (png);
+  checkAnnotateOutputs (output, pngs, protected_files);
   fs::create_directories (images_dir);
   // The images are staged and moved into place only once every frame has worked, so a failed
   // run leaves an earlier dataset's images as they were.

@@ -13,6 +13,16 @@ namespace agex
 {
 namespace apps
 {
+OutputRecogniser
+benchReportRecogniser ()
+{
+  return [frames = jsonReportWith ({"k", "repeat", "frames"}),
+          dataset = jsonReportWith ({"dataset", "detector_mode"})] (const std::string &path) {
+    const std::string why = frames (path);
+    return why.empty () || dataset (path).empty () ? std::string () : why;
+  };
+}
+
 namespace
 {
 using Cloud = pcl::PointCloud<pcl::PointXYZ>;

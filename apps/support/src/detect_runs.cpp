@@ -105,14 +105,19 @@ detectSingleFrame (const FrameJob &job, const LoadedDetector &loaded, const Dete
   DetectorPool detectors (loaded);
   const nlohmann::json doc = detectFrame (job, detectors, flags, flags.overlay_path.empty () ? nullptr : &overlay,
                                           flags.parts_overlay_path.empty () ? nullptr : &parts_overlay);
-  if (!flags.json_path.empty ())
-    writeJson (flags.json_path, doc);
-  else
+  {
+    // The frame's JSON and overlays belong together: another run's set is written before or
+    // after this one, never between its files.
+    const OutputSetClaim claim ({flags.json_path, flags.overlay_path, flags.parts_overlay_path});
+    if (!flags.json_path.empty ())
+      writeJson (flags.json_path, doc);
+    if (!flags.overlay_path.empty ())
+      writePng (flags.overlay_path, overlay);
+    if (!flags.parts_overlay_path.empty ())
+      writePng (flags.parts_overlay_path, parts_overlay);
+  }
+  if (flags.json_path.empty ())
     std::cout << doc.dump (2) << "\n";
-  if (!flags.overlay_path.empty ())
-    writePng (flags.overlay_path, overlay);
-  if (!flags.parts_overlay_path.empty ())
-    writePng (flags.parts_overlay_path, parts_overlay);
   for (const auto &d : doc["detections"])
     if (d["confidence"].get<float> () >= flags.min_confidence)
       std::cerr << "  " << d["class"].get<std::string> () << " " << d["confidence"].get<float> () << " at pixel ("

@@ -136,6 +136,14 @@ checkEvalOutputs (const EvalFlags &flags, const DatasetSelection &selection)
       throw std::runtime_error (dir + ": a file, not a directory");
     else if (!dir.empty ())
       read.checkOutput (dir);
+  // The PNGs these folders get (evaluation_runs.cpp), checked before any is written.
+  std::vector<std::string> pngs;
+  if (!flags.plots_dir.empty ())
+    pngs.push_back ((std::filesystem::path (flags.plots_dir) / "precision_recall.png").string ());
+  if (!flags.overlay_dir.empty ())
+    for (const std::string &id : selection.frame_ids)
+      pngs.push_back ((std::filesystem::path (flags.overlay_dir) / (id + ".png")).string ());
+  checkPngsInFolder (pngs, read);
 }
 }  // namespace apps
 }  // namespace agex

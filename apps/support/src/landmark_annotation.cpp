@@ -1,5 +1,7 @@
 #include <agex/apps/landmark_annotation.h>
 
+#include <agex/apps/output_guard.h>
+
 #include <agex/apps/landmarks.h>
 #include <agex/apps/output.h>
 #include <agex/landmarks/image_files.h>
@@ -41,6 +43,27 @@ pathFromXml (const std::string &xml_path, const std::string &image_path)
   return error || relative.empty () ? fs::absolute (image_path).string () : relative.string ();
 }
 
+namespace
+{
+std::string
+overlayPath (const std::string &dir, const std::string &name)
+{
+  return (fs::path (dir) / (fs::path (name).stem ().string () + ".png")).string ();
+}
+}  // namespace
+
+void
+checkAnnotateOutputs (const AnnotateOutput &output, const std::vector<std::string> &image_names, const InputFiles &inputs)
+{
+  checkOutputPath (output.out, OutputKind::ImglabXml, inputs);
+  if (output.overlay_dir.empty ())
+    return;
+  std::vector<std::string> overlays;
+  for (const std::string &name : image_names)
+    overlays.push_back (overlayPath (output.overlay_dir, name));
+  checkPngsInFolder (overlays, inputs);
+}
+
 void
 writeAnnotationOverlay (const std::string &dir, const std::string &name, const cv::Mat &image,
                         const std::vector<ContourAnnotation> &annotations, const InputFiles &inputs)
@@ -48,7 +71,7 @@ writeAnnotationOverlay (const std::string &dir, const std::string &name, const c
   std::vector<LandmarkedPerson> people;
   for (const auto &a : annotations)
     people.push_back ({a.box, 1.0, a.landmarks});
-  const std::string path = (fs::path (dir) / (fs::path (name).stem ().string () + ".png")).string ();
+  const std::string path = overlayPath (dir, name);
   inputs.checkOutput (path);
   fs::create_directories (dir);
   writePng (path, renderLandmarkOverlay (image, people));

@@ -2,6 +2,8 @@
 
 #include <agex/apps/command_line.h>
 #include <agex/apps/output.h>
+#include <agex/apps/output_guard.h>
+#include <agex/io/input_file.h>
 #include <agex/landmarks/contour_annotation.h>
 #include <agex/landmarks/image_files.h>
 
@@ -196,17 +198,48 @@ checkLandmarkEvaluationFlags (const LandmarkEvaluationFlags &f)
     throw std::runtime_error ("--train-also and --train-detector need --folds; --min-detection-height must be 0 or more");
 }
 
+void
+checkLandmarkModelOutputs (const std::string &shape_model, const std::string &detector, const InputFiles &inputs)
+{
+  // Only the loader knows a dlib model; what it refuses is not an earlier model.
+  const auto loads_as = [] (auto load, const std::string &what) -> OutputRecogniser {
+    return [load, what] (const std::string &path) {
+      try
+      {
+        load (path);
+        return std::string ();
+      }
+      catch (const std::exception &)
+      {
+        return "exists and is not " + what;
+      }
+    };
+  };
+  checkOutputPath (shape_model, "--out",
+                   loads_as ([] (const std::string &p) { ContourShapePredictor::load (p); }, "a shape predictor"), inputs);
+  if (!detector.empty ())
+    checkOutputPath (detector, "--detector-out",
+                     loads_as ([] (const std::string &p) { PeopleDetector::load (p); }, "a people detector"), inputs);
+}
+
 ScoredImageCallback
-landmarkOverlayWriter (const std::string &overlay_dir, const InputFiles &inputs)
+landmarkOverlayWriter (const std::string &overlay_dir, const LandmarkInputs &inputs)
 {
   if (overlay_dir.empty ())
     return {};
-  return [overlay_dir, &inputs] (const AnnotatedImage &image, const ContourShapePredictor &predictor) {
+  const auto overlay_of = [overlay_dir] (const AnnotatedImage &image) {
+    return overlay_dir + "/" + std::filesystem::path (image.path).stem ().string () + ".png";
+  };
+  std::vector<std::string> overlays;
+  for (std::size_t i = 0; i < inputs.tested; ++i)
+    overlays.push_back (overlay_of (inputs.images[i]));
+  checkPngsInFolder (overlays, inputs.read);
+  return [overlay_dir, overlay_of, &inputs] (const AnnotatedImage &image, const ContourShapePredictor &predictor) {
     std::vector<LandmarkedPerson> people;
     for (const auto &person : image.people)
       people.push_back ({person.box, 1.0, predictor.predict (image.grey, person.box)});
-    const std::string overlay = overlay_dir + "/" + std::filesystem::path (image.path).stem ().string () + ".png";
-    inputs.checkOutput (overlay);
+    const std::string overlay = overlay_of (image);
+    inputs.read.checkOutput (overlay);
     std::filesystem::create_directories (overlay_dir);
     writePng (overlay, renderLandmarkOverlay (readImage (image.path, cv::IMREAD_COLOR), people));
   };
@@ -307,6 +340,7 @@ void
 LandmarkOutputs::write (nlohmann::json header, const std::string &json_path, const std::string &lines_path,
                         const std::string &overlay_path) const
 {
+  const OutputSetClaim claim ({json_path, lines_path, overlay_path});  // written as one set
   if (!json_path.empty ())
   {
     header["frames"] = frames_;
@@ -362,13 +396,21 @@ checkLandmarkOutputs (const std::string &json, const std::string &lines, const s
 {
   if (!overlay.empty ())
     checkNotInImageSequence (overlay, video);
-  std::vector<std::string> read = images;
-  read.push_back (model);
+  InputFiles read (images);
+  read.add (model);
   if (!video.empty ())
-    read.push_back (video);
-  for (const auto &out : {json, lines, overlay})
-    if (!out.empty ())
-      checkOutputIsNotInput (out, read);
+    read.add (video);
+  const std::vector<std::string> outputs{json, lines, overlay};
+  for (std::size_t i = 0; i < outputs.size (); ++i)
+    for (std::size_t j = i + 1; j < outputs.size (); ++j)
+      if (!outputs[i].empty () && outputs[i] == outputs[j])
+        throw std::runtime_error (outputs[i] + ": --json, --json-lines and --overlay name the same file");
+  if (!json.empty ())
+    checkOutputPath (json, "agex_landmarks JSON", jsonReportWith ({"frames", "model", "detector"}), read);
+  if (!lines.empty ())
+    checkOutputPath (lines, "agex_landmarks JSON lines", jsonLinesWith ({"source", "people"}), read);
+  if (!overlay.empty ())
+    checkOutputPath (overlay, OutputKind::Png, read);
 }
 
 namespace
@@ -383,6 +425,52 @@ stopReading (int)
   interrupted = 1;
   std::signal (SIGINT, SIG_DFL);  // a second Ctrl-C ends a read that blocks
 }
+
+/** The file name of frame n of an image-sequence pattern such as "vs/t%03d.jpg": one printf
+  * integer conversion (%d, %0Nd) and no other %. Empty if video is no such pattern.
+  * \throws std::runtime_error for any other use of % (it would reach a printf) */
+std::string
+sequenceFrame (const std::string &video, long n)
+{
+  const std::size_t at = video.find ('%');
+  if (at == std::string::npos)
+    return "";
+  std::size_t end = at + 1;
+  while (end < video.size () && std::isdigit (static_cast<unsigned char> (video[end])) && end - at <= 2)
+    ++end;
+  if (end >= video.size () || video[end] != 'd' || video.find ('%', end) != std::string::npos ||
+      (end > at + 1 && video[at + 1] != '0'))
+    throw std::runtime_error ("--video " + video + ": an image sequence takes one %d or %0Nd (N < 10) and no other %");
+  std::string number = std::to_string (n);
+  const std::size_t width = end > at + 1 ? static_cast<std::size_t> (std::stoi (video.substr (at + 1, end - at - 1))) : 0;
+  if (number.size () < width)
+    number.insert (0, width - number.size (), '0');
+  return video.substr (0, at) + number + video.substr (end + 1);
+}
+
+/** An image sequence read file by file through readImage (its size checks from the header,
+  * regular files only), so that frames may change size. */
+int
+readImageSequence (const std::string &video, int max_frames,
+                   const std::function<void (const std::string &, const cv::Mat &)> &on_frame)
+{
+  namespace fs = std::filesystem;
+  long first = 0;  // the first number that exists, as OpenCV's image-sequence reader finds it
+  std::error_code ec;
+  while (first < 1000 && !fs::exists (sequenceFrame (video, first), ec))
+    ++first;
+  if (first == 1000)
+    throw std::runtime_error (video + ": no frame of the image sequence exists (numbers 0 to 999 looked for)");
+  int n = 0;
+  for (long i = first; !interrupted && (max_frames == 0 || n < max_frames); ++i, ++n)
+  {
+    const std::string path = sequenceFrame (video, i);
+    if (!fs::exists (path, ec))
+      break;
+    on_frame (video + "#" + std::to_string (n), readImage (path, cv::IMREAD_COLOR, "a frame of " + video));
+  }
+  return n;
+}
 }  // namespace
 
 int
@@ -391,6 +479,18 @@ readVideo (const std::string &video, int max_frames, const std::function<void (c
   const bool camera = !video.empty () && std::all_of (video.begin (), video.end (), ::isdigit);
   if (camera && video.size () > 4)
     throw std::runtime_error ("--video " + video + ": no such camera number");
+  interrupted = 0;
+  if (!camera && !sequenceFrame (video, 0).empty ())
+  {
+    std::signal (SIGINT, stopReading);
+    const int n = readImageSequence (video, max_frames, on_frame);
+    std::signal (SIGINT, SIG_DFL);
+    return n;
+  }
+  // Before anything opens it: a FIFO or a device would block the open until someone writes.
+  const std::string not_regular = camera ? "" : notARegularFile (video);
+  if (!not_regular.empty ())
+    throw std::runtime_error (video + ": " + not_regular + "; --video takes a video file, an image sequence or a camera number");
   cv::VideoCapture capture;
   // OpenCV logs each backend that fails to open the input; the one error below says it.
   const auto log_level = cv::utils::logging::setLogLevel (cv::utils::logging::LOG_LEVEL_SILENT);
@@ -398,7 +498,6 @@ readVideo (const std::string &video, int max_frames, const std::function<void (c
   cv::utils::logging::setLogLevel (log_level);
   if (!opened)
     throw std::runtime_error (video + ": cannot open the video or camera");
-  interrupted = 0;
   std::signal (SIGINT, stopReading);
   cv::Mat frame;
   int n = 0;

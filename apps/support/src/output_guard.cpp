@@ -5,8 +5,14 @@
 
 #include <nlohmann/json.hpp>
 
+#include <fcntl.h>
+#include <sys/file.h>
+#include <unistd.h>
+
 #include <array>
+#include <cerrno>
 #include <cstdint>
+#include <set>
 #include <filesystem>
 #include <fstream>
 #include <stdexcept>
@@ -138,64 +144,181 @@ isAgexPng (const std::string &bytes)
   return false;
 }
 
+namespace
+{
+/** Why the file is not a JSON object, "" if it is one (parsed into doc). */
+std::string
+notAJsonObject (const std::string &path, nlohmann::json &doc)
+{
+  constexpr std::size_t kMax = std::size_t (256) << 20;
+  const std::string bytes = readHead (path, kMax + 1);
+  if (bytes.size () > kMax)
+    return "exists and is larger than any JSON report agex writes";
+  doc = nlohmann::json::parse (bytes, nullptr, false);
+  return doc.is_object () ? "" : "exists and is not a JSON object";
+}
+
+std::string
+missingKey (const nlohmann::json &object, const std::vector<std::string> &keys)
+{
+  for (const std::string &key : keys)
+    if (!object.contains (key))
+      return key;
+  return "";
+}
+
+/** The recogniser of each kind of file output (Dataset has rules of its own). */
+OutputRecogniser
+recogniserOf (OutputKind kind)
+{
+  switch (kind)
+  {
+  case OutputKind::JsonDocument:
+    return notAFrameDocument;
+  case OutputKind::Png:
+    return [] (const std::string &path) {
+      return isAgexPng (readHead (path, 1 << 16)) ? "" : "exists and is not a PNG written by agex";
+    };
+  case OutputKind::Forest:
+    return [] (const std::string &path) {
+      return readHead (path, 8) == "AGEXFRST" ? "" : "exists and is not an agex forest file";
+    };
+  case OutputKind::Json:
+    return jsonReportWith ({});
+  case OutputKind::Model:
+    return [] (const std::string &path) {
+      // The format line comes right after the YAML header (DetectorModel::write).
+      return readHead (path, 256).find ("\nformat: agex-model\n") != std::string::npos ? "" : "exists and is not an agex model";
+    };
+  case OutputKind::ImglabXml:
+    return [] (const std::string &path) {
+      const std::string head = readHead (path, 4096);
+      return head.find ("<dataset>") != std::string::npos && head.find ("<comment>agex_annotate") != std::string::npos
+                 ? ""
+                 : "exists and is not an imglab dataset written by agex_annotate";
+    };
+  case OutputKind::JsonLines:  // ResultsFile reads the lines back and refuses what is not a result
+  case OutputKind::Dataset:
+    break;
+  }
+  return [] (const std::string &) { return std::string (); };
+}
+}  // namespace
+
+OutputRecogniser
+jsonReportWith (const std::vector<std::string> &keys)
+{
+  return [keys] (const std::string &path) -> std::string {
+    nlohmann::json doc;
+    const std::string why = notAJsonObject (path, doc);
+    if (!why.empty ())
+      return why + ", not a JSON report of agex";
+    const std::string missing = missingKey (doc, keys);
+    return missing.empty () ? "" : "exists and is a JSON object without \"" + missing + "\", not a report of this app";
+  };
+}
+
+OutputRecogniser
+jsonLinesWith (const std::vector<std::string> &keys)
+{
+  return [keys] (const std::string &path) -> std::string {
+    constexpr std::size_t kMax = std::size_t (1) << 30;
+    std::ifstream in (path, std::ios::binary);
+    std::string line;
+    std::size_t n = 0, bytes = 0;
+    while (std::getline (in, line))
+    {
+      ++n;
+      bytes += line.size () + 1;
+      if (bytes > kMax)
+        return "exists and is larger than any JSON-lines file agex writes";
+      if (line.empty ())
+        continue;
+      const auto doc = nlohmann::json::parse (line, nullptr, false);
+      if (!doc.is_object () || !missingKey (doc, keys).empty ())
+        return "exists and its line " + std::to_string (n) + " is not a JSON line of this app";
+    }
+    return "";
+  };
+}
+
 void
-checkOutputPath (const std::string &path, OutputKind kind, const InputFiles &inputs, bool force)
+checkOutputPath (const std::string &path, const std::string &what, const OutputRecogniser &recognise,
+                 const InputFiles &inputs)
 {
   inputs.checkOutput (path);
   std::error_code ec;
   const fs::file_status status = fs::symlink_status (path, ec);
   if (ec || !fs::exists (status))
     return;
-  if (kind == OutputKind::Dataset)
-  {
-    const std::string problem = datasetReplaceProblem (path);
-    if (!problem.empty ())
-      refuse (path, problem + "; --force replaces only an earlier agex dataset: choose another path");
-    if (!force)
-      refuse (path, "already exists; pass --force to replace it");
-    return;
-  }
   const std::string not_regular = notARegularFile (path);
   if (!not_regular.empty ())
     refuse (path, not_regular + "; choose another path");
   if (fs::file_size (path, ec) == 0 && !ec)
     return;  // nothing to lose
-  switch (kind)
-  {
-  case OutputKind::JsonDocument:
-  {
-    const std::string why = notAFrameDocument (path);
-    if (!why.empty ())
-      refuse (path, why + "; choose another path or remove it");
+  const std::string why = recognise (path);
+  if (!why.empty ())
+    refuse (path, why + (what.empty () ? "" : " (" + what + ")") + "; choose another path or remove it");
+}
+
+void
+checkOutputPath (const std::string &path, OutputKind kind, const InputFiles &inputs, bool force)
+{
+  if (kind != OutputKind::Dataset)
+    return checkOutputPath (path, "", recogniserOf (kind), inputs);
+  inputs.checkOutput (path);
+  std::error_code ec;
+  if (!fs::exists (fs::symlink_status (path, ec)) || ec)
     return;
+  const std::string problem = datasetReplaceProblem (path);
+  if (!problem.empty ())
+    refuse (path, problem + "; --force replaces only an earlier agex dataset: choose another path");
+  if (!force)
+    refuse (path, "already exists; pass --force to replace it");
+}
+
+void
+checkPngsInFolder (const std::vector<std::string> &pngs, const InputFiles &inputs)
+{
+  for (const std::string &png : pngs)
+  {
+    const fs::path folder = fs::path (png).parent_path ();
+    std::error_code ec;
+    if (!folder.empty () && fs::exists (folder, ec) && !fs::is_directory (folder, ec))
+      refuse (folder.string (), "is not a folder; choose another folder for the PNGs");
+    checkOutputPath (png, OutputKind::Png, inputs);
   }
-  case OutputKind::Png:
-    if (!isAgexPng (readHead (path, 1 << 16)))
-      refuse (path, "exists and is not a PNG written by agex; choose another path or remove it");
-    return;
-  case OutputKind::Forest:
-    if (readHead (path, 8) != "AGEXFRST")
-      refuse (path, "exists and is not an agex forest file; choose another path or remove it");
-    return;
-  case OutputKind::Json:
+}
+
+OutputSetClaim::OutputSetClaim (const std::vector<std::string> &paths)
+{
+  std::set<fs::path> folders;
+  for (const std::string &path : paths)
   {
-    std::ifstream in (path, std::ios::binary);
-    bool object = false;
-    try
+    if (path.empty ())
+      continue;
+    std::error_code ec;
+    const fs::path parent = fs::path (path).parent_path ();
+    const fs::path folder = fs::weakly_canonical (parent.empty () ? fs::path (".") : parent, ec);
+    if (!ec)
+      folders.insert (folder);
+  }
+  for (const fs::path &folder : folders)  // std::set: one order for every run, so no deadlock
+  {
+    const int fd = ::open (folder.c_str (), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+    if (fd < 0)
+      continue;
+    while (::flock (fd, LOCK_EX) != 0 && errno == EINTR)
     {
-      object = nlohmann::json::parse (in).is_object ();
     }
-    catch (const std::exception &)
-    {
-    }
-    if (!object)
-      refuse (path, "exists and is not a JSON report; choose another path or remove it");
-    return;
+    fds_.push_back (fd);
   }
-  case OutputKind::JsonLines:
-  case OutputKind::Dataset:
-    return;
-  }
+}
+
+OutputSetClaim::~OutputSetClaim ()
+{
+  for (const int fd : fds_)
+    ::close (fd);  // closing releases the lock
 }
 }  // namespace apps
 }  // namespace agex

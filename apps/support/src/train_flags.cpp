@@ -1,5 +1,7 @@
 #include <agex/apps/train_flags.h>
 
+#include <agex/apps/output_guard.h>
+
 #include <agex/apps/command_line.h>
 #include <agex/apps/dataset_selection.h>
 #include <agex/apps/pipeline_flags.h>
@@ -144,7 +146,7 @@ parseTrainFlags (int argc, char **argv, TrainFlags &flags)
     read.add (forest_path);
   for (const auto &pair : dataset_forests)
     read.add (pair.substr (pair.rfind ('=') + 1));
-  read.checkOutput (flags.out);
+  checkOutputPath (flags.out, OutputKind::Model, read);
   classifier_params.dictionary.seed = choice.seed;
   return true;
 }

@@ -3,6 +3,7 @@
 // returned as the JSON report, and the detector's throughput on several threads.
 
 #include <agex/apps/detector_flags.h>
+#include <agex/apps/output_guard.h>
 #include <agex/detection/depth_pipeline.h>
 #include <agex/io/frame_io.h>
 
@@ -15,6 +16,9 @@ namespace agex
 {
 namespace apps
 {
+/** How agex_bench tells its own earlier report (of frames or of a dataset) by its keys. */
+OutputRecogniser benchReportRecogniser ();
+
 /** agex_bench INPUT...: per frame, full size and (portrait, 640x480 frames only) in the
   * 144x176 portrait view, AGEX_k incremental against naive and the pipeline stage by stage. */
 nlohmann::json benchFrames (const std::vector<std::string> &inputs, const FrameOptions &frame_options,

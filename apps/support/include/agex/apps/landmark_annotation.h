@@ -31,6 +31,13 @@ boost::program_options::options_description annotateOutputOptions (AnnotateOutpu
 /** An image path as written into the XML: relative to the XML's folder when it can be. */
 std::string pathFromXml (const std::string &xml_path, const std::string &image_path);
 
+/** \brief Refuses the outputs of a run before it reads any image: --out unless it is free,
+  * empty or an imglab dataset agex_annotate wrote, and each overlay <dir>/<stem>.png of the
+  * named images unless it is free or an earlier agex PNG; none may land on an input.
+  * \throws std::runtime_error naming the path */
+void checkAnnotateOutputs (const AnnotateOutput &output, const std::vector<std::string> &image_names,
+                           const InputFiles &inputs);
+
 /** Writes <dir>/<stem of name>.png with the annotations drawn (never onto an input). */
 void writeAnnotationOverlay (const std::string &dir, const std::string &name, const cv::Mat &image,
                              const std::vector<ContourAnnotation> &annotations, const InputFiles &inputs);

@@ -79,10 +79,16 @@ boost::program_options::options_description landmarkEvaluationOptions (LandmarkE
 /** \throws std::runtime_error for flags that contradict each other or are out of range */
 void checkLandmarkEvaluationFlags (const LandmarkEvaluationFlags &flags);
 
+/** \brief Refuses --out (a shape predictor) and --detector-out (a people detector, if given)
+  * unless each path is free, empty, or holds an earlier model of its kind (it loads as one).
+  * \throws std::runtime_error naming the path */
+void checkLandmarkModelOutputs (const std::string &shape_model, const std::string &detector, const InputFiles &inputs);
+
 /** \brief Writes overlay_dir/<image stem>.png, the image with the landmarks the predictor
-  * places in its true boxes, for each image scored (never onto an input); empty overlay_dir:
-  * nothing. */
-ScoredImageCallback landmarkOverlayWriter (const std::string &overlay_dir, const InputFiles &inputs);
+  * places in its true boxes, for each image scored; empty overlay_dir: nothing. Every tested
+  * image's PNG is checked before anything is written: none may land on an input or replace a
+  * file there that is not an earlier agex PNG. \throws std::runtime_error naming the path */
+ScoredImageCallback landmarkOverlayWriter (const std::string &overlay_dir, const LandmarkInputs &inputs);
 /** A line per fold on standard error as it starts and when it is scored; image_scored as given. */
 CrossValidationCallbacks crossValidationProgress (const ScoredImageCallback &image_scored);
 

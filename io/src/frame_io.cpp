@@ -1,5 +1,6 @@
 #include <agex/common/focal_length.h>
 #include <agex/io/frame_io.h>
+#include <agex/io/image_header.h>
 #include <agex/io/input_file.h>
 #include <agex/io/pcd_reader.h>
 
@@ -36,17 +37,21 @@ fail (const std::string &path, const std::string &problem)
   throw FrameError (path + ": " + problem);
 }
 
-/** Refuses a PNG too large to decode from its header, before the decoder allocates. */
-void
-checkPngSize (const std::string &path)
+/** A depth PNG, checked by its content (whatever its name) before it is decoded. */
+cv::Mat
+readDepthPng (const std::string &path)
 {
-  unsigned char head[24] = {};
-  std::ifstream in (path, std::ios::binary);
-  if (!in.read (reinterpret_cast<char *> (head), sizeof (head)))
-    return;  // too short to be a PNG: the decoder says so
-  std::uint64_t width = 0, height = 0;
-  if (pngHeaderSize (head, sizeof (head), width, height))
-    checkFrameSize (path, width, height);
+  std::error_code ec;
+  if (fs::file_size (path, ec) == 0 && !ec)
+    fail (path, "cannot decode PNG (empty file)");
+  ImageHeader header;
+  const std::vector<unsigned char> bytes = readImageBytes (path, header);
+  if (header.format != "PNG")
+    fail (path, "is a " + header.format + " image; depth frames are PNG");
+  const cv::Mat depth = cv::imdecode (bytes, cv::IMREAD_UNCHANGED);
+  if (depth.empty ())
+    fail (path, "cannot decode PNG (truncated or not a PNG)");
+  return depth;
 }
 
 /** agex stages read x, y, z as single floats from any organized cloud. */
@@ -278,10 +283,7 @@ loadFrame (const std::string &path, const FrameOptions &options)
   cv::Mat depth;
   if (ext == ".png")
   {
-    checkPngSize (path);
-    depth = cv::imread (path, cv::IMREAD_UNCHANGED);
-    if (depth.empty ())
-      fail (path, "cannot decode PNG (truncated or not a PNG)");
+    depth = readDepthPng (path);
     if (depth.channels () != 1)
       fail (path, "is a " + std::to_string (depth.channels ()) +
                       "-channel image; a depth frame must be single-channel");

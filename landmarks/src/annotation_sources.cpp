@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <set>
 #include <stdexcept>
@@ -41,6 +42,45 @@ imglabIgnoreBox (const cv::Rect &box)
 
 namespace
 {
+/** Ids of COCO files (JSON integers; nlohmann reads them as 64-bit). */
+constexpr std::int64_t kMinId = std::numeric_limits<long>::min (), kMaxId = std::numeric_limits<long>::max ();
+
+/** Pixel coordinates of COCO files are within this (as imglab's, kMaxImglabCoordinate). */
+constexpr double kMaxCocoCoordinate = 1e6;
+
+// Numbers are taken into their real type with a range check: nlohmann's get<float> makes 1e300
+// infinite, get<int> truncates 2.5 and get<std::uint32_t> wraps 2^32 + 5 to 5.
+
+/** A JSON number that is a pixel coordinate (finite, within kMaxCocoCoordinate). */
+double
+cocoCoordinate (const nlohmann::json &v, const std::string &field)
+{
+  if (!v.is_number () || !(std::abs (v.get<double> ()) <= kMaxCocoCoordinate))
+    throw std::runtime_error (field + " " + v.dump () + " is not a pixel coordinate (a number within +-1e6)");
+  return v.get<double> ();
+}
+
+/** A JSON number that is a whole number in [lo, hi]. */
+std::int64_t
+cocoWhole (const nlohmann::json &v, std::int64_t lo, std::int64_t hi, const std::string &field)
+{
+  if (v.is_number_integer ())
+  {
+    // Unsigned values above 2^63 must not wrap to negative ones.
+    if (v.is_number_unsigned () ? v.get<std::uint64_t> () <= static_cast<std::uint64_t> (hi)
+                                : v.get<std::int64_t> () >= lo && v.get<std::int64_t> () <= hi)
+      return v.get<std::int64_t> ();
+  }
+  else if (v.is_number_float ())
+  {
+    const double d = v.get<double> ();
+    if (d == std::floor (d) && d >= static_cast<double> (lo) && d <= static_cast<double> (hi))
+      return static_cast<std::int64_t> (d);
+  }
+  throw std::runtime_error (field + " " + v.dump () + " is not a whole number in [" + std::to_string (lo) + ", " +
+                            std::to_string (hi) + "]");
+}
+
 // A COCO bbox [x, y, width, height]; nonsense is refused rather than cast (undefined
 // behaviour for huge values) into a box the dataset readers would reject later.
 cv::Rect
@@ -50,11 +90,7 @@ cocoBox (const nlohmann::json &bbox, const std::string &where)
     throw std::runtime_error (where + ": bbox is not [x, y, width, height]");
   double v[4];
   for (int i = 0; i < 4; ++i)
-  {
-    v[i] = bbox[i].get<double> ();
-    if (!std::isfinite (v[i]) || std::abs (v[i]) > 1e6)
-      throw std::runtime_error (where + ": bbox " + bbox.dump () + " has a value that is not a pixel coordinate");
-  }
+    v[i] = cocoCoordinate (bbox[i], where + ": bbox " + bbox.dump () + ": value");
   if (v[2] < 0 || v[3] < 0)
     throw std::runtime_error (where + ": bbox " + bbox.dump () + " has a negative size");
   return cv::Rect (static_cast<int> (v[0]), static_cast<int> (v[1]), static_cast<int> (v[2]), static_cast<int> (v[3]));
@@ -88,9 +124,13 @@ cocoPerson (const nlohmann::json &a, const std::string &where)
   person.num_keypoints = a.value ("num_keypoints", 0);
   if (a.contains ("keypoints"))
   {
-    const auto k = a["keypoints"].get<std::vector<float>> ();
+    const nlohmann::json &k = a["keypoints"];
+    if (!k.is_array ())
+      throw std::runtime_error (where + ": keypoints are not an array");
     for (std::size_t i = 0; i + 2 < k.size (); i += 3)
-      person.keypoints.emplace_back (k[i], k[i + 1], k[i + 2]);
+      person.keypoints.emplace_back (static_cast<float> (cocoCoordinate (k[i], where + ": keypoint x")),
+                                     static_cast<float> (cocoCoordinate (k[i + 1], where + ": keypoint y")),
+                                     static_cast<float> (cocoWhole (k[i + 2], 0, 2, where + ": keypoint visibility")));
   }
   if (a.contains ("segmentation"))
     person.segmentation = a["segmentation"];
@@ -117,7 +157,7 @@ readCocoPeople (const std::string &json_path)
       {
         categories_listed = true;
         if (c.value ("name", std::string ()) == "person")
-          person_categories.insert (c.at ("id").get<long> ());
+          person_categories.insert (cocoWhole (c.at ("id"), kMinId, kMaxId, "category id"));
       }
     std::vector<CocoImage> images;
     std::map<long, std::size_t> by_id;
@@ -125,7 +165,7 @@ readCocoPeople (const std::string &json_path)
     {
       where = "image " + entry.value ("id", nlohmann::json (-1)).dump ();
       CocoImage image;
-      image.id = entry.at ("id").get<long> ();
+      image.id = cocoWhole (entry.at ("id"), kMinId, kMaxId, "id");
       image.file = entry.at ("file_name").get<std::string> ();
       image.width = entry.value ("width", 0);
       image.height = entry.value ("height", 0);
@@ -136,9 +176,9 @@ readCocoPeople (const std::string &json_path)
     {
       where = "annotation " + a.value ("id", nlohmann::json (-1)).dump ();
       if (categories_listed && a.contains ("category_id") &&
-          !person_categories.count (a["category_id"].get<long> ()))
+          !person_categories.count (cocoWhole (a["category_id"], kMinId, kMaxId, "category_id")))
         continue;
-      const auto image = by_id.find (a.at ("image_id").get<long> ());
+      const auto image = by_id.find (cocoWhole (a.at ("image_id"), kMinId, kMaxId, "image_id"));
       if (image == by_id.end ())
         throw std::runtime_error (json_path + ": " + where + ": image_id " + a["image_id"].dump () +
                                   " is not in 'images'");
@@ -149,6 +189,13 @@ readCocoPeople (const std::string &json_path)
   catch (const nlohmann::json::exception &e)
   {
     throw std::runtime_error (json_path + ": " + where + ": " + e.what ());
+  }
+  catch (const std::runtime_error &e)
+  {
+    const std::string message = e.what ();
+    if (message.rfind (json_path, 0) == 0)
+      throw;
+    throw std::runtime_error (json_path + ": " + where + ": " + message);
   }
 }
 
@@ -162,20 +209,38 @@ cocoPersonMask (const CocoPerson &person, const cv::Size &image_size, const std:
     {
       if (s.empty ())
         return cv::Mat ();
-      return maskFromPolygons (image_size, s.get<std::vector<std::vector<float>>> ());
+    {
+      std::vector<std::vector<float>> polygons;
+      for (const auto &polygon : s)
+      {
+        if (!polygon.is_array ())
+          throw std::runtime_error ("segmentation polygon " + polygon.dump ().substr (0, 80) + " is not an array");
+        polygons.emplace_back ();
+        for (const auto &v : polygon)
+          polygons.back ().push_back (static_cast<float> (cocoCoordinate (v, "polygon vertex coordinate")));
+      }
+      return maskFromPolygons (image_size, polygons);
+    }
     }
     if (!s.is_object ())
       return cv::Mat ();
     if (!s.contains ("counts") || !s.contains ("size") || !s["size"].is_array () || s["size"].size () != 2)
       throw std::runtime_error ("segmentation is neither polygons nor an RLE object with 'counts' and 'size'");
-    const int height = s["size"][0].get<int> (), width = s["size"][1].get<int> ();
+    const int height = static_cast<int> (cocoWhole (s["size"][0], 0, 1 << 24, "RLE size[0] (height)"));
+    const int width = static_cast<int> (cocoWhole (s["size"][1], 0, 1 << 24, "RLE size[1] (width)"));
     if (height != image_size.height || width != image_size.width)
       throw std::runtime_error ("the RLE mask is " + std::to_string (width) + "x" + std::to_string (height) +
                                 " (size [h, w] = " + s["size"].dump () + "), the image " +
                                 std::to_string (image_size.width) + "x" + std::to_string (image_size.height));
-    const std::vector<std::uint32_t> counts = s["counts"].is_string ()
-                                                ? cocoRleCountsFromString (s["counts"].get<std::string> ())
-                                                : s["counts"].get<std::vector<std::uint32_t>> ();
+    std::vector<std::uint32_t> counts;
+    if (s["counts"].is_string ())
+      counts = cocoRleCountsFromString (s["counts"].get<std::string> ());
+    else if (s["counts"].is_array ())
+      for (const auto &c : s["counts"])
+        counts.push_back (static_cast<std::uint32_t> (
+          cocoWhole (c, 0, std::int64_t (height) * width, "RLE count " + std::to_string (counts.size ()))));
+    else
+      throw std::runtime_error ("RLE counts are neither a string nor an array");
     return maskFromCocoRle (counts, height, width);
   }
   catch (const std::exception &e)

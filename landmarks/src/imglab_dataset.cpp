@@ -311,15 +311,27 @@ public:
     return value;
   }
 
+  /** A pixel coordinate: a finite number within +-kMaxImglabCoordinate (within [0, that] for
+    * a size). Checked before any cast: as a float 1e300 is infinite, as an int 4294967643 is 347. */
+  double
+  coordinate (const XmlNode &node, const std::string &name, bool size = false) const
+  {
+    const double value = number (node, name);
+    if (!(value >= (size ? 0.0 : -kMaxImglabCoordinate) && value <= kMaxImglabCoordinate))
+      fail (node, "attribute '" + name + "' of <" + node.name + "> is " + attribute (node, name) + ", not a pixel " +
+                    (size ? "size (0 to 1000000)" : "coordinate (within +-1000000)"));
+    return value;
+  }
+
   ImglabBox
   box (const XmlNode &node) const
   {
     ImglabBox box;
     box.line = node.line;
-    box.rect = cv::Rect (static_cast<int> (std::lround (number (node, "left"))),
-                         static_cast<int> (std::lround (number (node, "top"))),
-                         static_cast<int> (std::lround (number (node, "width"))),
-                         static_cast<int> (std::lround (number (node, "height"))));
+    box.rect = cv::Rect (static_cast<int> (std::lround (coordinate (node, "left"))),
+                         static_cast<int> (std::lround (coordinate (node, "top"))),
+                         static_cast<int> (std::lround (coordinate (node, "width", true))),
+                         static_cast<int> (std::lround (coordinate (node, "height", true))));
     if (box.rect.width < 0 || box.rect.height < 0)
       fail (node, "box with a negative size");
     const auto ignore = node.attributes.find ("ignore");
@@ -335,8 +347,8 @@ public:
         const std::string &name = attribute (*child, "name");
         if (box.parts.count (name))
           fail (*child, "part '" + name + "' given twice in one box");
-        box.parts[name] = cv::Point2f (static_cast<float> (number (*child, "x")),
-                                       static_cast<float> (number (*child, "y")));
+        box.parts[name] = cv::Point2f (static_cast<float> (coordinate (*child, "x")),
+                                       static_cast<float> (coordinate (*child, "y")));
       }
     return box;
   }

@@ -20,6 +20,7 @@
 
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <map>
 #include <random>
 #include <regex>
@@ -681,6 +682,54 @@ TEST (BodyPartForest, MalformedPclTreeFilesNameFileAndLine)
   writeAll (dir.file ("claims.txt"), "24\n0 0 0 0 0\n");
   EXPECT_NE (modelError ([&] { BodyPartForest::load (dir.file ("claims.txt")); }).find ("truncated"), std::string::npos);
   EXPECT_NE (modelError ([&] { BodyPartForest::load (dir.file ("missing.txt")); }).find ("missing.txt"), std::string::npos);
+}
+
+TEST (BodyPartForest, PclForestTooLargeIsRefusedBeforeReading)
+{
+  // 9 KB of bzip2 can hold a depth-24 tree (16.7 M nodes, 201 MB of text): the declared
+  // depths are summed first, so the third such file is refused before any tree is read.
+  TempDir dir;
+  fs::create_directories (dir.path () / "forest");
+  for (int i = 0; i < 20; ++i)
+    writeAll (dir.file ("forest/tree_" + std::to_string (10 + i) + ".txt.bz2"), bzip2 ("24\n0 0 0 0 0\n"));
+  const auto start = std::chrono::steady_clock::now ();
+  const std::string message = modelError ([&] { BodyPartForest::load (dir.file ("forest")); });
+  EXPECT_LT (std::chrono::duration<double> (std::chrono::steady_clock::now () - start).count (), 2.0);
+  EXPECT_NE (message.find (dir.file ("forest/tree_12.txt.bz2")), std::string::npos) << message;
+  EXPECT_NE (message.find ("kMaxForestNodes"), std::string::npos) << message;
+  // Padded lines compress to nothing: a tree's text is bounded by its lines.
+  std::string padded = pclTreeText (twoLevelTree ());
+  for (int i = 0; i < 1000; ++i)
+    padded += std::string (4000, ' ') + "\n";
+  writeAll (dir.file ("padded.txt.bz2"), bzip2 (padded));
+  const std::string m2 = modelError ([&] { BodyPartForest::load (dir.file ("padded.txt.bz2")); });
+  EXPECT_NE (m2.find ("padded.txt.bz2"), std::string::npos) << m2;
+  EXPECT_NE (m2.find ("bytes of text for a depth-2 tree"), std::string::npos) << m2;
+}
+
+TEST (BodyPartForest, PclTreeSearchIsBounded)
+{
+  TempDir dir;
+  // A tree file 40 levels down: the search refuses the depth, naming the directory.
+  fs::path deep = dir.path () / "deep";
+  for (int i = 0; i < 40; ++i)
+    deep /= "d";
+  fs::create_directories (deep);
+  writeAll ((deep / "tree_2.txt").string (), pclTreeText (twoLevelTree ()));
+  std::string message = modelError ([&] { BodyPartForest::findPclTreeFiles (dir.file ("deep")); });
+  EXPECT_NE (message.find (dir.file ("deep") + ": folders nested deeper than 16 levels"), std::string::npos) << message;
+  // 15 folders down it is found.
+  fs::path ok = dir.path () / "ok";
+  for (int i = 0; i < 15; ++i)
+    ok /= "d";
+  fs::create_directories (ok);
+  writeAll ((ok / "tree_2.txt").string (), pclTreeText (twoLevelTree ()));
+  EXPECT_EQ (BodyPartForest::findPclTreeFiles (dir.file ("ok")).size (), 1u);
+  // A symlink loop ends at the same bound.
+  fs::create_directories (dir.path () / "loop");
+  fs::create_directory_symlink ("..", dir.path () / "loop" / "up");
+  message = modelError ([&] { BodyPartForest::findPclTreeFiles (dir.file ("loop")); });
+  EXPECT_NE (message.find ("nested deeper than"), std::string::npos) << message;
 }
 
 // --- PCL's published forests ----------------------------------------------------------------

@@ -5,6 +5,7 @@
 
 #include <agex/io/atomic_file.h>
 #include <agex/io/frame_io.h>
+#include <agex/io/image_header.h>
 #include <agex/io/pcd_reader.h>
 
 #include <pcl/io/pcd_io.h>
@@ -12,13 +13,16 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 
+#include <array>
 #include <cerrno>
+#include <chrono>
 #include <cmath>
 #include <csignal>
 #include <cstring>
 #include <fstream>
 #include <random>
 #include <sstream>
+#include <tuple>
 
 #include <sys/resource.h>
 #include <sys/stat.h>
@@ -323,6 +327,159 @@ TEST (FrameIo, PcdErrors)
       expectFrameError ([&] { agex::loadFrame (cut); }, {cut});
     }
   }
+}
+
+// --- Image headers ----------------------------------------------------------------------
+
+namespace
+{
+std::string
+le16 (unsigned v)
+{
+  return {static_cast<char> (v & 255), static_cast<char> (v >> 8)};
+}
+
+std::string
+le32 (std::uint32_t v)
+{
+  return le16 (v & 0xFFFF) + le16 (v >> 16);
+}
+
+/** A classic little-endian TIFF of w x h, 1 bit, one strip of a few bytes (a decompression
+  * bomb when large: the decoder allocates what the directory claims). */
+std::string
+tiff (std::uint32_t w, std::uint32_t h)
+{
+  std::string t = std::string ("II*\0", 4) + le32 (8);
+  const std::vector<std::array<std::uint32_t, 3>> entries = {
+    {256, 4, w}, {257, 4, h}, {258, 3, 1}, {259, 3, 1}, {262, 3, 0}, {273, 4, 8 + 2 + 9 * 12 + 4},
+    {277, 3, 1}, {278, 4, h}, {279, 4, 16}};
+  t += le16 (static_cast<unsigned> (entries.size ()));
+  for (const auto &e : entries)
+    t += le16 (e[0]) + le16 (e[1]) + le32 (1) + le32 (e[2]);
+  return t + le32 (0) + std::string (16, '\0');
+}
+
+std::string
+encoded (const std::string &ext, const cv::Mat &image)
+{
+  std::vector<unsigned char> bytes;
+  EXPECT_TRUE (cv::imencode (ext, image, bytes)) << ext;
+  return std::string (bytes.begin (), bytes.end ());
+}
+
+/** The offset of a JPEG's first frame header (SOF0 marker). */
+std::size_t
+sofAt (const std::string &jpeg)
+{
+  const std::size_t at = jpeg.find ("\xFF\xC0", 2);
+  EXPECT_NE (at, std::string::npos);
+  return at;
+}
+
+agex::ImageHeader
+header (const std::string &bytes, std::string *problem = nullptr)
+{
+  agex::ImageHeader h;
+  const std::string p = agex::parseImageHeader (reinterpret_cast<const unsigned char *> (bytes.data ()), bytes.size (), h);
+  if (problem)
+    *problem = p;
+  else
+    EXPECT_EQ (p, "") << h.format;
+  return h;
+}
+}  // namespace
+
+TEST (ImageHeader, SizesOfEveryFormatAsOpenCvWritesThem)
+{
+  TempDir dir;
+  cv::Mat grey (23, 37, CV_8UC1, cv::Scalar (7)), colour (23, 37, CV_8UC3, cv::Scalar (1, 2, 3));
+  const std::vector<std::pair<std::string, std::string>> formats = {
+    {".png", "PNG"}, {".jpg", "JPEG"}, {".tif", "TIFF"}, {".webp", "WebP"}, {".bmp", "BMP"},
+    {".pgm", "PNM"}, {".ppm", "PNM"}, {".pam", "PAM"}, {".pfm", "PFM"}, {".ras", "Sun raster"}};
+  for (const auto &[ext, format] : formats)
+  {
+    SCOPED_TRACE (ext);
+    cv::Mat image = ext == ".pgm" ? grey : colour;
+    if (ext == ".pfm")
+      colour.convertTo (image, CV_32FC3);
+    const std::string bytes = encoded (ext, image);
+    const agex::ImageHeader h = header (bytes);
+    EXPECT_EQ (h.format, format);
+    EXPECT_EQ (h.width, 37u);
+    EXPECT_EQ (h.height, 23u);
+    writeAll (dir.file ("a" + ext), bytes);
+    const cv::Mat decoded = agex::readImageFile (dir.file ("a" + ext), cv::IMREAD_UNCHANGED);
+    EXPECT_EQ (decoded.size (), cv::Size (37, 23));
+  }
+  // WebP's lossless (VP8L) and a top-down BMP.
+  EXPECT_EQ (header (encoded (".webp", colour), nullptr).width, 37u);
+  std::vector<unsigned char> lossless;
+  ASSERT_TRUE (cv::imencode (".webp", colour, lossless, {cv::IMWRITE_WEBP_QUALITY, 101}));
+  EXPECT_EQ (header (std::string (lossless.begin (), lossless.end ())).height, 23u);
+  std::string bmp = encoded (".bmp", colour);
+  bmp.replace (22, 4, le32 (static_cast<std::uint32_t> (-23)));
+  EXPECT_EQ (header (bmp).height, 23u);
+}
+
+TEST (ImageHeader, BombsAreRefusedFromTheHeaderBeforeDecoding)
+{
+  TempDir dir;
+  std::string jpeg = encoded (".jpg", cv::Mat (16, 16, CV_8UC1, cv::Scalar (9)));
+  // libjpeg takes the first frame header: one claiming 30000 x 30000, then the 16 x 16 one
+  // after the scan, where a check that keeps the last one sees a small image.
+  std::string two_sof = jpeg;
+  const std::size_t sof = sofAt (two_sof);
+  const std::string small_sof = two_sof.substr (sof, 2 + (static_cast<unsigned char> (two_sof[sof + 2]) << 8 |
+                                                         static_cast<unsigned char> (two_sof[sof + 3])));
+  two_sof[sof + 5] = two_sof[sof + 7] = static_cast<char> (30000 >> 8);
+  two_sof[sof + 6] = two_sof[sof + 8] = static_cast<char> (30000 & 255);
+  two_sof.insert (two_sof.size () - 2, small_sof);
+  const std::vector<std::tuple<std::string, std::string, std::string>> bombs = {
+    {"bomb.tif", tiff (32767, 32767), "claims a 32767x32767"},
+    {"bomb_be.tif", std::string ("MM\0*\0\0\0\x08\0\x02\x01\0\0\x04\0\0\0\x01\0\0\x7f\xff\x01\x01\0\x04\0\0\0\x01\0\0\x7f\xff", 34),
+     "claims a 32767x32767"},
+    {"bomb.webp", "RIFF" + le32 (30) + "WEBPVP8X" + le32 (10) + std::string (4, '\0') + std::string ("\xff\x3f\0\xff\x3f\0", 6),
+     "claims a 16384x16384"},
+    {"bomb_lossless.webp", "RIFF" + le32 (30) + "WEBPVP8L" + le32 (10) + "\x2f" + le32 (0x0FFFFFFF) + std::string (5, '\0'),
+     "claims a 16384x16384"},
+    {"bomb.bmp", "BM" + le32 (0) + le32 (0) + le32 (54) + le32 (40) + le32 (30000) + le32 (static_cast<std::uint32_t> (-30000)) +
+                   le16 (1) + le16 (24) + std::string (24, '\0'),
+     "claims a 30000x30000"},
+    {"bomb.pgm", "P5\n# a comment\n30000 30000\n255\n", "claims a 30000x30000"},
+    {"bomb.pam", "P7\nWIDTH 30000\nHEIGHT 30000\nDEPTH 1\nMAXVAL 255\nTUPLTYPE GRAYSCALE\nENDHDR\n", "claims a 30000x30000"},
+    {"bomb.pfm", "Pf\n30000 30000\n-1.0\n", "claims a 30000x30000"},
+    {"bomb.ras", std::string ("\x59\xA6\x6A\x95\0\0\x75\x30\0\0\x75\x30\0\0\0\x08", 16) + std::string (16, '\0'),
+     "claims a 30000x30000"},
+    {"two_sof.jpg", two_sof, "two frame headers (SOF) that disagree: 30000x30000, then 16x16"},
+    {"cut.jpg", jpeg.substr (0, jpeg.size () - 2), "truncated JPEG"},
+    {"garbage.jpg", jpeg.substr (0, 20) + "x" + jpeg.substr (20), "no marker at byte 20"},
+    {"j2k.jp2", std::string ("\0\0\0\x0CjP  \r\n\x87\n", 12), "JPEG 2000"},
+    {"bigtiff.tif", std::string ("II+\0\x08\0\0\0", 8), "BigTIFF"},
+    {"text.png", "hello", "not an image agex reads"},
+    {"empty.jpg", "", "empty file"},
+  };
+  for (const auto &[name, bytes, expect] : bombs)
+  {
+    SCOPED_TRACE (name);
+    const std::string path = dir.file (name);
+    writeAll (path, bytes);
+    const auto start = std::chrono::steady_clock::now ();
+    expectFrameError ([&] { agex::readImageFile (path, cv::IMREAD_UNCHANGED); }, {path, expect});
+    EXPECT_LT (std::chrono::duration<double> (std::chrono::steady_clock::now () - start).count (), 0.5);
+  }
+  // The name does not matter: a TIFF named .png is a TIFF, for frames too.
+  writeAll (dir.file ("tiff.png"), tiff (32767, 32767));
+  expectFrameError ([&] { agex::loadFrame (dir.file ("tiff.png")); }, {dir.file ("tiff.png"), "claims a 32767x32767"});
+  writeAll (dir.file ("small_tiff.png"), encoded (".tif", cv::Mat (8, 8, CV_16UC1, cv::Scalar (1000))));
+  expectFrameError ([&] { agex::loadFrame (dir.file ("small_tiff.png")); }, {"is a TIFF image; depth frames are PNG"});
+  // A large (sparse) file is refused from its size, before it is read.
+  const std::string large = dir.file ("large.jpg");
+  writeAll (large, jpeg);
+  fs::resize_file (large, agex::kMaxImageFileBytes + 1);
+  const auto start = std::chrono::steady_clock::now ();
+  expectFrameError ([&] { agex::readImageFile (large, cv::IMREAD_UNCHANGED); }, {large, "bytes, larger than the"});
+  EXPECT_LT (std::chrono::duration<double> (std::chrono::steady_clock::now () - start).count (), 0.5);
 }
 
 TEST (FrameIo, HugeClaimedSizesAndDamagedFieldsAreRefusedBeforeReading)

@@ -5,6 +5,7 @@
 // test/apps/test_landmark_apps.cpp.)
 
 #include <agex/common/statistics.h>
+#include <agex/landmarks/annotation_sources.h>
 #include <agex/landmarks/contour_annotation.h>
 #include <agex/landmarks/contour_shape_predictor.h>
 #include <agex/landmarks/imglab_dataset.h>
@@ -128,6 +129,19 @@ TEST (ImglabDataset, BadFilesNameTheFileAndTheProblem)
                   "</image></images></dataset>");
   EXPECT_NO_THROW (agex::readImglabDataset (path));
   EXPECT_THROW (agex::readImglabDataset ((dir / "missing.xml").string ()), std::runtime_error);
+  // Numbers beyond their type: 1e300 is infinite as a float, 4294967643 is 347 as an int.
+  const std::string box = "<dataset><images><image file='a'>\n<box top='1' left='2' width='30' height='40'>";
+  expect_error (box + "<part name='p' x='1e300' y='5'/></box></image></images></dataset>",
+                "line 2: attribute 'x' of <part> is 1e300, not a pixel coordinate");
+  expect_error (box + "<part name='p' x='5' y='-3e9'/></box></image></images></dataset>", "'y' of <part> is -3e9");
+  expect_error ("<dataset><images><image file='a'><box top='1' left='2' width='4294967643' height='4'/></image>"
+                "</images></dataset>",
+                "attribute 'width' of <box> is 4294967643, not a pixel size");
+  expect_error ("<dataset><images><image file='a'><box top='1' left='1e300' width='4' height='4'/></image>"
+                "</images></dataset>",
+                "attribute 'left' of <box> is 1e300");
+  writeAll (path, box + "<part name='p' x='-1000000' y='999999.5'/></box></image></images></dataset>");
+  EXPECT_EQ (agex::readImglabDataset (path).images[0].boxes[0].parts.at ("p").x, -1e6f);
   fs::remove_all (dir);
 }
 
@@ -279,6 +293,58 @@ TEST (ContourAnnotation, MirroredMaskGivesMirroredLandmarks)
     const cv::Point2f p = b.landmarks[agex::mirroredContourLandmark (i)];
     EXPECT_LT (cv::norm (a.landmarks[i] - cv::Point2f (320 - p.x, p.y)), 4.0) << i;
   }
+}
+
+// COCO numbers are taken into their real type with a range check: an RLE count plus 2^32,
+// fractional counts or sizes, and vertices at 1e300 or 3e9 are refused, not wrapped or cast.
+TEST (CocoAnnotations, NumbersOutOfTheirTypeAreRefused)
+{
+  const fs::path dir = tempDir ("coco_numbers");
+  const std::string path = (dir / "coco.json").string ();
+  const std::string image = R"({"images": [{"id": 1, "file_name": "a.png", "width": 4, "height": 3}], )";
+  auto person = [&] (const std::string &annotation) {
+    writeAll (path, image + R"("annotations": [{"id": 7, "image_id": 1, "bbox": [0, 0, 4, 3], )" + annotation + "}]}");
+    return agex::readCocoPeople (path).at (0).people.at (0);
+  };
+  auto error = [&] (auto fn) {
+    try
+    {
+      fn ();
+    }
+    catch (const std::runtime_error &e)
+    {
+      return std::string (e.what ());
+    }
+    return std::string ();
+  };
+  const cv::Size size (4, 3);
+  // The right counts, then the same plus 2^32, fractional, and a fractional size.
+  EXPECT_EQ (cv::countNonZero (agex::cocoPersonMask (person (R"("segmentation": {"counts": [2, 5, 4, 1], "size": [3, 4]})"),
+                                                     size, "p")),
+             6);
+  for (const auto &[segmentation, expect] : std::vector<std::pair<std::string, std::string>> {
+         {R"({"counts": [2, 4294967301, 4, 1], "size": [3, 4]})", "p: RLE count 1 4294967301 is not a whole number in [0, 12]"},
+         {R"({"counts": [2, 5.5, 3.5, 1], "size": [3, 4]})", "RLE count 1 5.5 is not a whole number"},
+         {R"({"counts": [2, 5, 4, 1], "size": [3.5, 4]})", "RLE size[0] (height) 3.5 is not a whole number"},
+         {R"([[0, 0, 1e300, 0, 2, 2]])", "polygon vertex coordinate 1e+300 is not a pixel coordinate"},
+         {R"([[0, 0, 3000000000, 0, 2, 2]])", "polygon vertex coordinate 3000000000 is not a pixel coordinate"},
+         {R"([[0, 0, -3e9, 0, 2, 2]])", "polygon vertex coordinate -3000000000.0 is not a pixel coordinate"}})
+  {
+    const agex::CocoPerson p = person ("\"segmentation\": " + segmentation);
+    const std::string message = error ([&] { agex::cocoPersonMask (p, size, "p"); });
+    EXPECT_NE (message.find (expect), std::string::npos) << segmentation << ": " << message;
+  }
+  // Keypoints and ids, refused when the file is read, naming it and the annotation.
+  for (const auto &[annotation, expect] : std::vector<std::pair<std::string, std::string>> {
+         {R"("keypoints": [1e300, 2, 2])", "annotation 7: keypoint x 1e+300 is not a pixel coordinate"},
+         {R"("keypoints": [1, 2, 1.5])", "annotation 7: keypoint visibility 1.5 is not a whole number in [0, 2]"}})
+  {
+    const std::string message = error ([&] { person (annotation); });
+    EXPECT_NE (message.find (path + ": " + expect), std::string::npos) << annotation << ": " << message;
+  }
+  writeAll (path, R"({"images": [{"id": 1.5, "file_name": "a.png"}], "annotations": []})");
+  EXPECT_NE (error ([&] { agex::readCocoPeople (path); }).find ("id 1.5 is not a whole number"), std::string::npos);
+  fs::remove_all (dir);
 }
 
 TEST (ContourAnnotation, CocoKeypointsAndPolygons)

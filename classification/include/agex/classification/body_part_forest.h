@@ -120,6 +120,14 @@ public:
   static constexpr int kMaxDepth = 24;
   static constexpr int kMaxTrees = 64;
   static constexpr int kMaxClasses = 255;
+  /** Test nodes of all of a PCL forest's trees together (400 MB at 12 bytes): two depth-24
+    * trees, 32 of depth 20. A 9 KB .bz2 holds a depth-24 tree, so file sizes bound nothing. */
+  static constexpr std::uint64_t kMaxForestNodes = std::uint64_t (1) << 25;
+  /** Text decompressed from all of a forest's PCL tree files together (1 GiB). */
+  static constexpr std::uint64_t kMaxForestTextBytes = std::uint64_t (1) << 30;
+  /** How deep below a forest directory tree files are looked for, and how many entries. */
+  static constexpr int kMaxSearchDepth = 16;
+  static constexpr std::size_t kMaxSearchEntries = 100000;
   /** PCL's trees::focal (tree.h): the constant of s = F / d. */
   static constexpr float kFeatureScale = 1000.f;
   /** The focal length PCL's trees were trained for (label_common.h FOCAL, the Kinect's). */
@@ -243,16 +251,19 @@ public:
   /** \brief PCL tree files as one forest with PCL's 32 labels (label_common.h), mapped to
     * parts: FaceLB/RB/LT/RT -> head, Lhand/Rhand -> hand, Lfoot/Rfoot -> foot, the other
     * body labels (0-26) -> other body, Groundplane, Ceiling, Background, Plane, NOLABEL ->
-    * none; vote rule PclMajority, reference focal 525, background class 29.
+    * none; vote rule PclMajority, reference focal 525, background class 29. The trees' declared
+    * depths are read first: a forest of more than kMaxForestNodes nodes is refused before any
+    * tree is read, and one of more than kMaxForestTextBytes of text while it is read.
     * \throws ModelError naming the file and line */
   static Ptr loadPclTrees (const std::vector<std::string> &files);
-  /** The PCL tree files under a directory, recursively, in sorted path order.
-    * \throws ModelError if it is not a readable directory or holds none */
+  /** The PCL tree files under a directory, recursively (at most kMaxSearchDepth levels
+    * below it, kMaxSearchEntries entries), in sorted path order.
+    * \throws ModelError if it is not a readable directory, holds none, or is deeper or larger */
   static std::vector<std::string> findPclTreeFiles (const std::string &directory);
   /** \brief Parses one PCL tree in PCL's text format (trees.cpp loadTree: the depth D on the
     * first line, then 2^D - 1 lines "du1 dv1 du2 dv2 threshold", then 2^D lines of one leaf
     * label), one item per line, every value in range (offsets and thresholds int16, labels
-    * 0-31, 1 <= D <= kMaxDepth).
+    * 0-31, 1 <= D <= kMaxDepth), at most kMaxForestNodes nodes and kMaxForestTextBytes of text.
     * \throws ModelError "name:line: problem" on malformed or truncated text */
   static Tree readPclTree (std::istream &text, const std::string &name);
   /** PCL's 32 labels as classes (names of label_common.h part_t, parts as above). */

@@ -12,8 +12,9 @@ namespace agex
 {
 /** \brief Reads an image (cv::imread flags). Refuses, naming the file and what it was needed
   * for (role, e.g. "an image of dataset.xml"): files that are not regular files, unreadable or
-  * undecodable files, images over agex::kMaxFramePixels (checked in a PNG or JPEG header before
-  * any decoding), and truncated JPEGs.
+  * undecodable files, files over agex::kMaxImageFileBytes, images over agex::kMaxFramePixels
+  * (checked in the header before any decoding: agex/io/image_header.h, which also refuses
+  * formats it does not check), and truncated JPEGs.
   * \throws std::runtime_error */
 cv::Mat readImage (const std::string &path, int flags, const std::string &role = "");
 

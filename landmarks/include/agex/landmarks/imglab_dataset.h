@@ -10,6 +10,9 @@
 
 namespace agex
 {
+/** Box and part coordinates of an imglab file lie within +-1e6 pixels (sizes within 1e6). */
+constexpr double kMaxImglabCoordinate = 1e6;
+
 /** One object box of an imglab dataset. Part coordinates are image pixels. */
 struct ImglabBox
 {
@@ -33,7 +36,8 @@ struct ImglabDataset
   std::vector<ImglabImage> images;
 };
 
-/** Reads an imglab XML file. Unknown elements and attributes are skipped.
+/** Reads an imglab XML file. Unknown elements and attributes are skipped; numbers beyond
+  * kMaxImglabCoordinate are refused.
   * \throws std::runtime_error naming the file, the line and the problem */
 ImglabDataset readImglabDataset (const std::string &path);
 

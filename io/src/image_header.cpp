@@ -54,7 +54,9 @@ sizeText (std::uint64_t w, std::uint64_t h)
 
 // JPEG (ITU T.81 B.1): segments walked, entropy-coded data skipped to its next marker. libjpeg
 // takes the first frame header (SOF) and refuses another; others may not, so any frame header
-// that disagrees is refused, whether before or after the first scan.
+// that disagrees is refused, whether before or after the first scan. Markers are found as
+// libjpeg's next_marker () finds them: bytes before an 0xFF are skipped, and FF 00 outside a
+// scan is no marker (a segment length read there would hide the frame header behind it).
 std::string
 jpegHeader (const Bytes &b, ImageHeader &header)
 {
@@ -62,13 +64,15 @@ jpegHeader (const Bytes &b, ImageHeader &header)
   bool have_sof = false;
   while (i < b.size)
   {
-    if (b.u8 (i) != 0xFF)
-      return "damaged JPEG: no marker at byte " + std::to_string (i);
+    while (i < b.size && b.u8 (i) != 0xFF)
+      ++i;  // extraneous bytes: libjpeg warns and skips them
     while (i < b.size && b.u8 (i) == 0xFF)
       ++i;  // fill bytes
     if (i >= b.size)
       break;
     const unsigned marker = b.u8 (i++);
+    if (marker == 0x00)
+      continue;  // a stuffed zero: no marker, the search goes on
     if (marker == 0xD9)
       return have_sof ? "" : "damaged JPEG: no frame header (SOF) before its end";
     if (marker == 0x01 || (marker >= 0xD0 && marker <= 0xD8))
@@ -123,9 +127,15 @@ tiffHeader (const Bytes &b, ImageHeader &header)
     const std::uint32_t tag = b.u16 (at, big), type = b.u16 (at + 2, big), count = b.u32 (at + 4, big);
     if ((tag != 256 && tag != 257) || count != 1)
       continue;
-    // SHORT (3) or LONG (4); a SHORT is left-aligned in the value field.
+    // libtiff takes the first of two equal tags; a reader that took the last would be fooled.
+    if (tag == 256 ? have_width : have_height)
+      return "damaged TIFF: its first directory gives the image " + std::string (tag == 256 ? "width" : "length") +
+             " twice";
+    // BYTE (1), SHORT (3) or LONG (4); a BYTE or SHORT is left-aligned in the value field.
     std::uint64_t value;
-    if (type == 3)
+    if (type == 1)
+      value = b.u8 (at + 8);
+    else if (type == 3)
       value = b.u16 (at + 8, big);
     else if (type == 4)
       value = b.u32 (at + 8, big);
@@ -224,8 +234,13 @@ pamHeader (const Bytes &b, ImageHeader &header)
     std::size_t end = i;
     while (end < b.size && b.u8 (end) != '\n')
       ++end;
-    const std::string line (reinterpret_cast<const char *> (b.data) + i, end - i);
+    std::string line (reinterpret_cast<const char *> (b.data) + i, end - i);
     i = end + 1;
+    // OpenCV's PAM reader also ends a line at a carriage return and skips leading white space:
+    // a header read line by line differently could hide a second size. Refused, not guessed.
+    if (line.find ('\r') != std::string::npos)
+      return "damaged PAM header: a carriage return in its header";
+    line.erase (0, line.find_first_not_of (" \t\v\f"));
     std::size_t at = 0;
     if (line.rfind ("ENDHDR", 0) == 0)
       return have_width && have_height ? "" : "damaged PAM header: no WIDTH or HEIGHT";
@@ -237,6 +252,8 @@ pamHeader (const Bytes &b, ImageHeader &header)
         const Bytes field{reinterpret_cast<const unsigned char *> (line.data ()), line.size ()};
         if (!pnmNumber (field, at, value))
           return std::string ("damaged PAM header: ") + key + " is not a number";
+        if (key[0] == 'W' ? have_width : have_height)
+          return std::string ("damaged PAM header: ") + key + " given twice";
         (key[0] == 'W' ? header.width : header.height) = value;
         (key[0] == 'W' ? have_width : have_height) = true;
       }

@@ -435,6 +435,17 @@ TEST (ImageHeader, BombsAreRefusedFromTheHeaderBeforeDecoding)
   two_sof[sof + 5] = two_sof[sof + 7] = static_cast<char> (30000 >> 8);
   two_sof[sof + 6] = two_sof[sof + 8] = static_cast<char> (30000 & 255);
   two_sof.insert (two_sof.size () - 2, small_sof);
+  // FF 00 right after the start: libjpeg drops it and reads the 30000 x 30000 frame header
+  // behind it; a reader taking FF 00 for a segment skips 65504 bytes to a small JPEG there.
+  std::string big = two_sof.substr (0, two_sof.size () - 2 - small_sof.size ()) + "\xFF\xD9";
+  std::string stuffed = "\xFF\xD8\xFF" + std::string (1, '\0') + big.substr (2);
+  stuffed.resize (4 + 0xFFE0, '\0');
+  stuffed += jpeg.substr (2);
+  // TIFF: libtiff takes the first of two equal tags.
+  std::string twice_tiff = std::string ("II*\0", 4) + le32 (8) + le16 (4);
+  for (const auto &[tag, value] : std::vector<std::pair<unsigned, std::uint32_t>>{{256, 32767}, {256, 8}, {257, 32767}, {257, 8}})
+    twice_tiff += le16 (tag) + le16 (4) + le32 (1) + le32 (value);
+  twice_tiff += le32 (0);
   const std::vector<std::tuple<std::string, std::string, std::string>> bombs = {
     {"bomb.tif", tiff (32767, 32767), "claims a 32767x32767"},
     {"bomb_be.tif", std::string ("MM\0*\0\0\0\x08\0\x02\x01\0\0\x04\0\0\0\x01\0\0\x7f\xff\x01\x01\0\x04\0\0\0\x01\0\0\x7f\xff", 34),
@@ -452,8 +463,13 @@ TEST (ImageHeader, BombsAreRefusedFromTheHeaderBeforeDecoding)
     {"bomb.ras", std::string ("\x59\xA6\x6A\x95\0\0\x75\x30\0\0\x75\x30\0\0\0\x08", 16) + std::string (16, '\0'),
      "claims a 30000x30000"},
     {"two_sof.jpg", two_sof, "two frame headers (SOF) that disagree: 30000x30000, then 16x16"},
+    {"stuffed_zero.jpg", stuffed, "claims a 30000x30000"},
+    {"twice.tif", twice_tiff, "gives the image width twice"},
+    {"cr.pam", "P7\n#\rWIDTH 30000\rHEIGHT 30000\rDEPTH 1\rMAXVAL 255\rENDHDR\nWIDTH 8\nHEIGHT 6\nENDHDR\n",
+     "a carriage return"},
+    {"indented.pam", "P7\n WIDTH 30000\nHEIGHT 30000\nDEPTH 1\nMAXVAL 255\nENDHDR\n", "claims a 30000x30000"},
+    {"width_twice.pam", "P7\nWIDTH 30000\nWIDTH 8\nHEIGHT 6\nDEPTH 1\nMAXVAL 255\nENDHDR\n", "WIDTH given twice"},
     {"cut.jpg", jpeg.substr (0, jpeg.size () - 2), "truncated JPEG"},
-    {"garbage.jpg", jpeg.substr (0, 20) + "x" + jpeg.substr (20), "no marker at byte 20"},
     {"j2k.jp2", std::string ("\0\0\0\x0CjP  \r\n\x87\n", 12), "JPEG 2000"},
     {"bigtiff.tif", std::string ("II+\0\x08\0\0\0", 8), "BigTIFF"},
     {"text.png", "hello", "not an image agex reads"},
@@ -468,6 +484,8 @@ TEST (ImageHeader, BombsAreRefusedFromTheHeaderBeforeDecoding)
     expectFrameError ([&] { agex::readImageFile (path, cv::IMREAD_UNCHANGED); }, {path, expect});
     EXPECT_LT (std::chrono::duration<double> (std::chrono::steady_clock::now () - start).count (), 0.5);
   }
+  // A stray byte before a marker: libjpeg skips it with a warning, and so does the check.
+  EXPECT_EQ (header (jpeg.substr (0, 20) + "x" + jpeg.substr (20)).width, 16u);
   // The name does not matter: a TIFF named .png is a TIFF, for frames too.
   writeAll (dir.file ("tiff.png"), tiff (32767, 32767));
   expectFrameError ([&] { agex::loadFrame (dir.file ("tiff.png")); }, {dir.file ("tiff.png"), "claims a 32767x32767"});

@@ -274,12 +274,24 @@ TEST (ResultsFile, ResumesRepairsATornLineInPlaceAndRefusesForeignFiles)
   EXPECT_EQ (readAll (path), "{\"frame\":\"d/a\"}\n{\"frame\":\"d/b\"}\n");
 
   // Someone else's file is left as it is, whatever line is not a result.
+  // A one-line file that is not JSON but starts with "{" (no newline) is no torn result either.
   for (const std::string foreign : {"my notes\n", "{\"frame\":\"d/a\"}\nnot json\n{\"frame\":\"d/b\"}\n",
-                                     "{\"frame\":\"d/a\"}\n{\"x\":1}", "{\"frame\":3}\n"})
+                                     "{\"frame\":\"d/a\"}\n{\"x\":1}", "{\"frame\":3}\n", "{a: 1}", "{\"name\": \"my"})
   {
     writeAll (path, foreign);
     expectRefusal ([&] { agex::apps::ResultsFile results (path, "test"); }, {path, "is not a frame result of test"});
     EXPECT_EQ (readAll (path), foreign);
+  }
+  // A first line torn as agex writes them (killed inside the run's first write) is cut off.
+  for (const std::string torn : {std::string ("{\"detections\":[{\"cla"), std::string ("{\"ba"), std::string ("{")})
+  {
+    writeAll (path, torn);
+    {
+      agex::apps::ResultsFile results (path, "test");
+      EXPECT_EQ (results.doneCount (), 0u);
+      results.append ("{\"frame\":\"d/a\"}");
+    }
+    EXPECT_EQ (readAll (path), "{\"frame\":\"d/a\"}\n") << torn;
   }
   expectRefusal ([&] { agex::apps::ResultsFile results (tmp.path ().string (), "test"); }, {"is a directory"});
   const std::string fifo = tmp.file ("fifo.jsonl");

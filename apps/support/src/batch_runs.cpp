@@ -39,8 +39,6 @@ struct ResultLine
   nlohmann::json doc;
 };
 
-/** The frame results of a JSON-lines results file. A torn last line (an interrupted run) is
-  * skipped with a warning; any other line that is not a frame result is refused. */
 /** What makes a line with a "frame" no whole frame result of agex_detect (what a merge would
   * pass on as real: a frame without a name, detections that are not a list of detections);
   * "" for a whole one. */
@@ -63,6 +61,8 @@ resultLineProblem (const nlohmann::json &doc)
   return "";
 }
 
+/** The frame results of a JSON-lines results file. A torn last line (an interrupted run) is
+  * skipped with a warning; any other line that is not a frame result is refused. */
 std::vector<ResultLine>
 readResultLines (const std::string &path, const std::string &app)
 {

@@ -12,6 +12,8 @@
 #include <array>
 #include <cerrno>
 #include <cstdint>
+#include <cstring>
+#include <iostream>
 #include <set>
 #include <filesystem>
 #include <fstream>
@@ -308,8 +310,18 @@ OutputSetClaim::OutputSetClaim (const std::vector<std::string> &paths)
     const int fd = ::open (folder.c_str (), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
     if (fd < 0)
       continue;
-    while (::flock (fd, LOCK_EX) != 0 && errno == EINTR)
+    int locked;
+    while ((locked = ::flock (fd, LOCK_EX)) != 0 && errno == EINTR)
     {
+    }
+    if (locked != 0)
+    {
+      // Some network file systems refuse flock on a folder: the outputs are still written
+      // atomically, one by one, but say so rather than claim what was not held.
+      std::cerr << "warning: " << folder.string () << ": cannot lock the folder (" << std::strerror (errno)
+                << "); outputs written there by two runs at once may mix\n";
+      ::close (fd);
+      continue;
     }
     fds_.push_back (fd);
   }

@@ -98,6 +98,20 @@ ResultsFile::ResultsFile (const std::string &path, const std::string &app) : pat
   }
 }
 
+namespace
+{
+/** Whether a torn line begins as agex writes its result lines (keys in sorted order: "batch"
+  * in a --shard run, else "detections" first), or is a shorter start of one. */
+bool
+startsLikeAResult (const std::string &line)
+{
+  for (const std::string start : {"{\"batch\":{", "{\"detections\":["})
+    if (line.compare (0, std::min (line.size (), start.size ()), start, 0, std::min (line.size (), start.size ())) == 0)
+      return true;
+  return false;
+}
+}  // namespace
+
 void
 ResultsFile::readBack ()
 {
@@ -133,8 +147,9 @@ ResultsFile::readBack ()
         if (last && !writeAll (fd_, "\n"))  // the final newline was missing
           throw std::runtime_error (path_ + ": cannot append: " + std::strerror (errno));
       }
-      // Our lines are JSON objects: one torn by an interrupted run still starts like one.
-      else if (last && doc.is_discarded () && line[0] == '{')
+      // A line torn by an interrupted run: after whole results, any cut JSON object; alone,
+      // only the start of one of ours, never a user's one-line file that is not JSON.
+      else if (last && doc.is_discarded () && line[0] == '{' && (!done_.empty () || startsLikeAResult (line)))
       {
         if (::ftruncate (fd_, static_cast<off_t> (begin)) != 0)
           throw std::runtime_error (path_ + ": cannot cut off its torn last line: " + std::strerror (errno));

@@ -64,8 +64,9 @@ void checkPngsInFolder (const std::vector<std::string> &pngs, const InputFiles &
   * overlays): an exclusive flock(2) on the folder of each, taken in one fixed order and held
   * until destruction. Two runs writing the same set then write one after the other, so the
   * set on disk is always one run's whole set, never a mix. Waits while another run holds
-  * the claim (writing a set takes milliseconds). Folders that cannot be opened are skipped:
-  * their outputs are still written atomically, one by one. */
+  * the claim (writing a set takes milliseconds). Folders that cannot be opened or locked
+  * (the latter with a warning) are skipped: their outputs are still written atomically, one
+  * by one. */
 class OutputSetClaim
 {
 public:

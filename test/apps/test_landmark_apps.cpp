@@ -401,8 +401,6 @@ runCapturing (const std::string &command, const fs::path &dir, std::string *out,
   return WIFEXITED (status) ? WEXITSTATUS (status) : -1;
 }
 
-// Label maps (one person per image, excluded labels), instance masks in Penn-Fudan's layout
-// (STEM_mask.png, palette PNGs), and the masks that cannot be used, each named with its reason.
 // An image sequence whose frames change size (640x480, then 550x830): each frame gives the
 // people it gives as a still image (the later frames gave none when OpenCV's reader kept the
 // first frame's size).
@@ -430,12 +428,24 @@ TEST (LandmarkApps, ImageSequenceFramesMayChangeSize)
       EXPECT_EQ (v["frames"][n]["people"][i]["box"], s["frames"][n]["people"][i]["box"]);
   }
   EXPECT_GT (s["frames"][1]["people"].size (), 0u) << "the resized frame has no people to compare";
-  // A pattern with any other printf conversion is refused, not handed to a printf.
-  EXPECT_NE (run (app + " --video " + (dir / "t%s.png").string ()), 0);
-  EXPECT_NE (run (app + " --video " + (dir / "t%d%d.png").string ()), 0);
+  // A pattern with a second conversion is refused, not handed to a printf.
+  const std::string log = (dir / "log.txt").string ();
+  EXPECT_NE (std::system ((app + " --video " + (dir / "t%d%d.png").string () + " > " + log + " 2>&1").c_str ()), 0);
+  EXPECT_NE (readAll (log).find ("an image sequence takes one %d or %0Nd"), std::string::npos) << readAll (log);
+  // A still image given as the video is read as one (its size checked from its header): the
+  // numbered ones after it with it, as OpenCV's image-sequence reader would.
+  ASSERT_EQ (run (app + " --video " + first + " --json " + from_video), 0);
+  EXPECT_EQ (nlohmann::json::parse (readAll (from_video))["frames"].size (), 2u);
+  const std::string bomb = (dir / "bomb.png").string ();  // a TIFF that claims 32767 x 32767
+  writeAll (bomb, std::string ("II*\0\x08\0\0\0\x02\0\0\x01\x04\0\x01\0\0\0\xff\x7f\0\0\x01\x01\x04\0\x01\0\0\0\xff\x7f\0\0"
+                                "\0\0\0\0", 38));
+  EXPECT_NE (std::system ((app + " --video " + bomb + " > " + log + " 2>&1").c_str ()), 0);
+  EXPECT_NE (readAll (log).find ("claims a 32767x32767"), std::string::npos) << readAll (log);
   fs::remove_all (dir);
 }
 
+// Label maps (one person per image, excluded labels), instance masks in Penn-Fudan's layout
+// (STEM_mask.png, palette PNGs), and the masks that cannot be used, each named with its reason.
 TEST (LandmarkApps, AnnotateMaskFolders)
 {
   const fs::path dir = tempDir ("masks");

@@ -4,6 +4,7 @@
 #include <agex/apps/forest_flags.h>
 #include <agex/apps/output_guard.h>
 #include <agex/apps/pipeline_flags.h>
+#include <agex/common/body_part.h>
 
 #include <boost/program_options.hpp>
 
@@ -118,6 +119,44 @@ parseEvalFlags (int argc, char **argv, bool distributed, EvalFlags &flags)
   return true;
 }
 
+OutputRecogniser
+evalReportRecogniser ()
+{
+  // One key set per mode: coverage, detect, parts, compare.
+  std::vector<OutputRecogniser> modes;
+  for (const auto &keys : std::vector<std::vector<std::string>>{
+           {"dataset", "keyframes_only"}, {"dataset", "detector_mode"}, {"dataset", "forest"}, {"agex", "sliding_window"}})
+    modes.push_back (jsonReportWith (keys));
+  return [modes] (const std::string &path) {
+    std::string why;
+    for (const auto &mode : modes)
+      if ((why = mode (path)).empty ())
+        return why;
+    return why.find ("JSON object without") == std::string::npos
+               ? why
+               : std::string ("exists and is a JSON object with none of the keys of an agex_eval report");
+  };
+}
+
+std::vector<std::string>
+evalPlotFiles (const std::string &mode, const std::string &plots_dir)
+{
+  if (plots_dir.empty ())
+    return {};
+  // evaluation_runs.cpp: detect draws one precision-recall plot, compare one per part.
+  std::vector<std::string> names{"precision_recall.png"};
+  if (mode == "compare")
+  {
+    names.clear ();
+    for (int c = 0; c < kBodyPartCount; ++c)
+      names.push_back ("compare_" + std::string (bodyPartName (static_cast<BodyPart> (c))) + ".png");
+  }
+  std::vector<std::string> files;
+  for (const std::string &name : names)
+    files.push_back ((std::filesystem::path (plots_dir) / name).string ());
+  return files;
+}
+
 void
 checkEvalOutputs (const EvalFlags &flags, const DatasetSelection &selection)
 {
@@ -128,7 +167,7 @@ checkEvalOutputs (const EvalFlags &flags, const DatasetSelection &selection)
     if (!model.empty ())
       std::filesystem::is_directory (model) ? read.addTree (model) : read.add (model);
   if (!flags.json_path.empty ())
-    checkOutputPath (flags.json_path, OutputKind::Json, read);
+    checkOutputPath (flags.json_path, "agex_eval report", evalReportRecogniser (), read);
   if (!flags.plot_path.empty ())
     checkOutputPath (flags.plot_path, OutputKind::Png, read);
   for (const auto &dir : {flags.plots_dir, flags.overlay_dir})
@@ -137,9 +176,7 @@ checkEvalOutputs (const EvalFlags &flags, const DatasetSelection &selection)
     else if (!dir.empty ())
       read.checkOutput (dir);
   // The PNGs these folders get (evaluation_runs.cpp), checked before any is written.
-  std::vector<std::string> pngs;
-  if (!flags.plots_dir.empty ())
-    pngs.push_back ((std::filesystem::path (flags.plots_dir) / "precision_recall.png").string ());
+  std::vector<std::string> pngs = evalPlotFiles (flags.mode, flags.plots_dir);
   if (!flags.overlay_dir.empty ())
     for (const std::string &id : selection.frame_ids)
       pngs.push_back ((std::filesystem::path (flags.overlay_dir) / (id + ".png")).string ());

@@ -1,6 +1,7 @@
 #include <agex/apps/evaluation_runs.h>
 
 #include <agex/apps/command_line.h>
+#include <agex/apps/eval_flags.h>
 #include <agex/apps/output_guard.h>
 #include <agex/apps/output.h>
 #include <agex/common/statistics.h>
@@ -377,7 +378,12 @@ mergeDetectionEvaluations (const std::vector<std::string> &parts, const std::str
     throw std::runtime_error ("shard(s) " + missing + " of " + std::to_string (count) + " missing; merge them all");
   }
   InputFiles read (parts);
-  checkOutputPath (json_path, OutputKind::Json, read);
+  checkOutputPath (json_path, "agex_eval report", evalReportRecogniser (), read);
+  if (!plots_dir.empty ())
+  {
+    read.checkOutput (plots_dir);
+    checkPngsInFolder (evalPlotFiles ("detect", plots_dir), read);
+  }
   DetectionTally tally (radius);
   for (const auto &[index, part] : by_index)
     tally.merge (part.second, part.first);

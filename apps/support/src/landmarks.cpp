@@ -3,6 +3,7 @@
 #include <agex/apps/command_line.h>
 #include <agex/apps/output.h>
 #include <agex/apps/output_guard.h>
+#include <agex/io/image_header.h>
 #include <agex/io/input_file.h>
 #include <agex/landmarks/contour_annotation.h>
 #include <agex/landmarks/image_files.h>
@@ -17,6 +18,7 @@
 #include <cctype>
 #include <csignal>
 #include <filesystem>
+#include <fstream>
 #include <iostream>
 #include <iterator>
 #include <regex>
@@ -426,46 +428,95 @@ stopReading (int)
   std::signal (SIGINT, SIG_DFL);  // a second Ctrl-C ends a read that blocks
 }
 
-/** The file name of frame n of an image-sequence pattern such as "vs/t%03d.jpg": one printf
-  * integer conversion (%d, %0Nd) and no other %. Empty if video is no such pattern.
-  * \throws std::runtime_error for any other use of % (it would reach a printf) */
-std::string
-sequenceFrame (const std::string &video, long n)
+/** An image sequence: the file names around its frame number, the number's width (0: as
+  * many digits as it has) and the first number. */
+struct ImageSequence
 {
-  const std::size_t at = video.find ('%');
-  if (at == std::string::npos)
-    return "";
-  std::size_t end = at + 1;
-  while (end < video.size () && std::isdigit (static_cast<unsigned char> (video[end])) && end - at <= 2)
-    ++end;
-  if (end >= video.size () || video[end] != 'd' || video.find ('%', end) != std::string::npos ||
-      (end > at + 1 && video[at + 1] != '0'))
+  std::string before, after;
+  std::size_t width = 0;
+  long first = 0;
+  bool numbered = true;  ///< false: one image, no number
+
+  std::string
+  frame (long n) const
+  {
+    if (!numbered)
+      return before;
+    std::string number = std::to_string (n);
+    if (number.size () < width)
+      number.insert (0, width - number.size (), '0');
+    return before + number + after;
+  }
+};
+
+/** The pattern of "vs/t%03d.jpg": one %d or %0Nd (N < 10), and no other %; its first frame is
+  * the first number 0-999 that exists, as OpenCV's image-sequence reader finds it. False if
+  * video holds no such conversion (a name with a % of another kind goes to OpenCV as it is).
+  * \throws std::runtime_error for a second % beside the conversion (it would reach a printf),
+  *         or no frame */
+bool
+sequencePattern (const std::string &video, ImageSequence &sequence)
+{
+  static const std::regex conversion ("%(0[1-9])?d");
+  std::smatch match;
+  if (!std::regex_search (video, match, conversion))
+    return false;
+  sequence.before = match.prefix ().str ();
+  sequence.after = match.suffix ().str ();
+  if (sequence.before.find ('%') != std::string::npos || sequence.after.find ('%') != std::string::npos)
     throw std::runtime_error ("--video " + video + ": an image sequence takes one %d or %0Nd (N < 10) and no other %");
-  std::string number = std::to_string (n);
-  const std::size_t width = end > at + 1 ? static_cast<std::size_t> (std::stoi (video.substr (at + 1, end - at - 1))) : 0;
-  if (number.size () < width)
-    number.insert (0, width - number.size (), '0');
-  return video.substr (0, at) + number + video.substr (end + 1);
+  sequence.width = match[1].matched ? static_cast<std::size_t> (match[1].str ()[1] - '0') : 0;
+  std::error_code ec;
+  for (sequence.first = 0; sequence.first < 1000; ++sequence.first)
+    if (std::filesystem::exists (sequence.frame (sequence.first), ec))
+      return true;
+  throw std::runtime_error (video + ": no frame of the image sequence exists (numbers 0 to 999 looked for)");
+}
+
+/** A still image given as the video (its content says so, whatever its name): OpenCV's
+  * image-sequence reader would decode it, and the numbered files after it (f0001.png, then
+  * f0002.png, ...), without agex's size checks; read here the same way through readImage.
+  * False if path is no image. */
+bool
+stillImageSequence (const std::string &path, ImageSequence &sequence)
+{
+  std::ifstream in (path, std::ios::binary);
+  std::vector<unsigned char> head (1 << 16);
+  in.read (reinterpret_cast<char *> (head.data ()), static_cast<std::streamsize> (head.size ()));
+  ImageHeader header;
+  parseImageHeader (head.data (), static_cast<std::size_t> (in.gcount ()), header);
+  if (header.format.empty ())
+    return false;
+  // The last run of digits in the file name numbers the frames.
+  const std::string name = std::filesystem::path (path).filename ().string ();
+  const std::size_t last = name.find_last_of ("0123456789");
+  sequence.numbered = last != std::string::npos && last - name.find_last_not_of ("0123456789", last) <= 9;
+  if (!sequence.numbered)
+  {
+    sequence.before = path;
+    return true;
+  }
+  const std::size_t digits_start = name.find_last_not_of ("0123456789", last) + 1;  // npos + 1 == 0
+  const std::size_t dir_length = path.size () - name.size ();
+  sequence.before = path.substr (0, dir_length + digits_start);
+  sequence.after = name.substr (last + 1);
+  sequence.width = last + 1 - digits_start;
+  sequence.first = std::stol (name.substr (digits_start, sequence.width));
+  return true;
 }
 
 /** An image sequence read file by file through readImage (its size checks from the header,
   * regular files only), so that frames may change size. */
 int
-readImageSequence (const std::string &video, int max_frames,
+readImageSequence (const std::string &video, const ImageSequence &sequence, int max_frames,
                    const std::function<void (const std::string &, const cv::Mat &)> &on_frame)
 {
-  namespace fs = std::filesystem;
-  long first = 0;  // the first number that exists, as OpenCV's image-sequence reader finds it
-  std::error_code ec;
-  while (first < 1000 && !fs::exists (sequenceFrame (video, first), ec))
-    ++first;
-  if (first == 1000)
-    throw std::runtime_error (video + ": no frame of the image sequence exists (numbers 0 to 999 looked for)");
   int n = 0;
-  for (long i = first; !interrupted && (max_frames == 0 || n < max_frames); ++i, ++n)
+  std::error_code ec;
+  for (long i = sequence.first; !interrupted && (max_frames == 0 || n < max_frames); ++i, ++n)
   {
-    const std::string path = sequenceFrame (video, i);
-    if (!fs::exists (path, ec))
+    const std::string path = sequence.frame (i);
+    if ((n > 0 && !sequence.numbered) || !std::filesystem::exists (path, ec))
       break;
     on_frame (video + "#" + std::to_string (n), readImage (path, cv::IMREAD_COLOR, "a frame of " + video));
   }
@@ -480,17 +531,21 @@ readVideo (const std::string &video, int max_frames, const std::function<void (c
   if (camera && video.size () > 4)
     throw std::runtime_error ("--video " + video + ": no such camera number");
   interrupted = 0;
-  if (!camera && !sequenceFrame (video, 0).empty ())
-  {
+  ImageSequence sequence;
+  const auto read_sequence = [&] {
     std::signal (SIGINT, stopReading);
-    const int n = readImageSequence (video, max_frames, on_frame);
+    const int n = readImageSequence (video, sequence, max_frames, on_frame);
     std::signal (SIGINT, SIG_DFL);
     return n;
-  }
+  };
+  if (!camera && sequencePattern (video, sequence))
+    return read_sequence ();
   // Before anything opens it: a FIFO or a device would block the open until someone writes.
   const std::string not_regular = camera ? "" : notARegularFile (video);
   if (!not_regular.empty ())
     throw std::runtime_error (video + ": " + not_regular + "; --video takes a video file, an image sequence or a camera number");
+  if (!camera && stillImageSequence (video, sequence))
+    return read_sequence ();
   cv::VideoCapture capture;
   // OpenCV logs each backend that fails to open the input; the one error below says it.
   const auto log_level = cv::utils::logging::setLogLevel (cv::utils::logging::LOG_LEVEL_SILENT);

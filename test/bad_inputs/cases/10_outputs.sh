@@ -10,6 +10,7 @@ cp in/frame.png in/own/photo.png  # a PNG agex did not write
 cp "$SRC/data/images/five_people.jpg" in/people.jpg
 cp in/people.jpg in/own/images/a.jpg && cp in/all_invalid_640x480.png in/own/masks/a.png
 cp in/frame.png in/own/overlays/a.png && cp in/frame.png in/own/plots/precision_recall.png
+cp in/frame.png in/own/plots/compare_head.png
 cp in/frame.png in/own/images_png/people.png
 cp "$SRC/data/models/agex_contour_landmarks.dat" in/contour_landmarks.dat
 printf "<?xml version='1.0'?>\n<dataset>\n<images>\n<image file='../people.jpg'>\n</image>\n</images>\n</dataset>\n" \
@@ -22,6 +23,10 @@ check "agex_bench --json over another JSON file" 1 "config.json: exists and is a
   $BIN/agex_bench in/frame.png --json in/own/config.json
 check "agex_train --out over the user's notes" 1 "notes.txt: exists and is not an agex model" \
   $T --dataset in/dataset --out in/own/notes.txt
+check "agex_eval --json over another JSON file" 1 "config.json: exists and is a JSON object with none of the keys of an agex_eval report" \
+  $E coverage --dataset in/dataset --json in/own/config.json
+check "agex_eval compare --plots over the user's PNG" 1 "compare_head.png: exists and is not a PNG written by agex" \
+  $E compare --dataset in/dataset --plots in/own/plots
 check "agex_eval detect --plots over the user's PNG" 1 "precision_recall.png: exists and is not a PNG written by agex" \
   $E detect --dataset in/dataset --plots in/own/plots
 if [ -x "$BIN/agex_landmarks" ]; then
@@ -102,6 +107,8 @@ sed '1s/"detections":\[[^]]*\]/"detections":"none"/' out/part0.jsonl > in/part_d
 hash_inputs
 check "agex_eval --merge of a shard whose count wraps past int" 1 "shard_count_wraps.json: \"shard\" says part 0 of 2808348672" \
   $E detect --merge in/shard_count_wraps.json --json out/merged_report.json
+check "agex_eval --merge with --plots over the user's PNG" 1 "precision_recall.png: exists and is not a PNG written by agex" \
+  $E detect --merge out/shard_0_of_1.json --json out/merged_report.json --plots in/own/plots
 check "agex_eval --merge of a state whose bands are not a list" 1 "bands_not_a_list.json: person evaluation state \"bands\" must be a list" \
   $E detect --merge in/bands_not_a_list.json --json out/merged_report.json
 check "agex_detect --merge of a line with \"frame\": \"\"" 1 "part_empty_frame.jsonl: line 1: \"frame\" is empty" \

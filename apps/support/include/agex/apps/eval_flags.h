@@ -3,6 +3,7 @@
 // detector, the weak part labels and the depth pipeline (without its --k), checked before
 // anything is read.
 
+#include <agex/apps/output_guard.h>
 #include <agex/apps/dataset_selection.h>
 #include <agex/apps/detector_flags.h>
 #include <agex/detection/depth_pipeline.h>
@@ -47,5 +48,11 @@ bool parseEvalFlags (int argc, char **argv, bool distributed, EvalFlags &flags);
   * forest) or a file of another kind: --json a JSON report, --plot a PNG, --plots and
   * --overlay-dir directories. \throws std::runtime_error naming the path */
 void checkEvalOutputs (const EvalFlags &flags, const DatasetSelection &selection);
+
+/** How agex_eval tells its own earlier report (of any mode) by its keys. */
+OutputRecogniser evalReportRecogniser ();
+
+/** The PNGs agex_eval MODE writes into --plots DIR (checked before any is written). */
+std::vector<std::string> evalPlotFiles (const std::string &mode, const std::string &plots_dir);
 }  // namespace apps
 }  // namespace agex

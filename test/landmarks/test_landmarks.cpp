@@ -339,7 +339,8 @@ TEST (CocoAnnotations, NumbersOutOfTheirTypeAreRefused)
          {R"("keypoints": [1e300, 2, 2])", "annotation 7: keypoint x 1e+300 is not a pixel coordinate"},
          {R"("keypoints": [1, 2, 1.5])", "annotation 7: keypoint visibility 1.5 is not a whole number in [0, 2]"}})
   {
-    const std::string message = error ([&] { person (annotation); });
+    const std::string &field = annotation;  // a structured binding cannot be captured in C++17
+    const std::string message = error ([&] { person (field); });
     EXPECT_NE (message.find (path + ": " + expect), std::string::npos) << annotation << ": " << message;
   }
   writeAll (path, R"({"images": [{"id": 1.5, "file_name": "a.png"}], "annotations": []})");

@@ -48,7 +48,7 @@ readDepthPng (const std::string &path)
   const std::vector<unsigned char> bytes = readImageBytes (path, header);
   if (header.format != "PNG")
     fail (path, "is a " + header.format + " image; depth frames are PNG");
-  const cv::Mat depth = cv::imdecode (bytes, cv::IMREAD_UNCHANGED);
+  const cv::Mat depth = decodeImageBytes (path, bytes, cv::IMREAD_UNCHANGED);
   if (depth.empty ())
     fail (path, "cannot decode PNG (truncated or not a PNG)");
   return depth;

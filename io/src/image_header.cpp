@@ -220,6 +220,10 @@ pnmNumber (const Bytes &b, std::size_t &i, std::uint64_t &value)
   value = 0;
   for (; i < b.size && b.u8 (i) >= '0' && b.u8 (i) <= '9'; ++i)
     value = std::min<std::uint64_t> (value * 10 + (b.u8 (i) - '0'), std::uint64_t (1) << 32);
+  // OpenCV's ReadNumber consumes the byte that ends a number, whatever it is: "30000#300000"
+  // is 30000 then 300000 to it, not 30000 and a comment.
+  if (i < b.size)
+    ++i;
   return true;
 }
 
@@ -340,11 +344,24 @@ readImageBytes (const std::string &path, ImageHeader &header)
 }
 
 cv::Mat
+decodeImageBytes (const std::string &path, const std::vector<unsigned char> &bytes, int flags)
+{
+  try
+  {
+    return cv::imdecode (bytes, flags);
+  }
+  catch (const cv::Exception &e)
+  {
+    throw FrameError (path + ": OpenCV refused to decode it (" + e.err + ")");
+  }
+}
+
+cv::Mat
 readImageFile (const std::string &path, int flags, std::vector<unsigned char> *bytes_out)
 {
   ImageHeader header;
   std::vector<unsigned char> bytes = readImageBytes (path, header);
-  const cv::Mat image = cv::imdecode (bytes, flags);
+  const cv::Mat image = decodeImageBytes (path, bytes, flags);
   if (image.empty ())
     throw FrameError (path + ": not an image OpenCV can decode (a damaged " + header.format + ")");
   checkFrameSize (path, static_cast<std::uint64_t> (image.cols), static_cast<std::uint64_t> (image.rows));

@@ -283,8 +283,9 @@ TEST (ResultsFile, ResumesRepairsATornLineInPlaceAndRefusesForeignFiles)
     EXPECT_EQ (readAll (path), foreign);
   }
   // A first line torn as agex writes them (killed inside the run's first write) is cut off.
-  for (const std::string torn : {std::string ("{\"detections\":[{\"cla"), std::string ("{\"ba"), std::string ("{")})
+  for (const char *cut : {"{\"detections\":[{\"cla", "{\"ba", "{"})
   {
+    const std::string torn = cut;
     writeAll (path, torn);
     {
       agex::apps::ResultsFile results (path, "test");

@@ -469,6 +469,9 @@ TEST (ImageHeader, BombsAreRefusedFromTheHeaderBeforeDecoding)
      "a carriage return"},
     {"indented.pam", "P7\n WIDTH 30000\nHEIGHT 30000\nDEPTH 1\nMAXVAL 255\nENDHDR\n", "claims a 30000x30000"},
     {"width_twice.pam", "P7\nWIDTH 30000\nWIDTH 8\nHEIGHT 6\nDEPTH 1\nMAXVAL 255\nENDHDR\n", "WIDTH given twice"},
+    // OpenCV takes the byte after a number with it: the height is 300000, not a comment (the
+    // fuzzer found this; OpenCV then threw past its own pixel limit, which killed the app).
+    {"hash.pgm", "P5\n# comment\n30000#300000\n25\n", "claims a 30000x300000"},
     {"cut.jpg", jpeg.substr (0, jpeg.size () - 2), "truncated JPEG"},
     {"j2k.jp2", std::string ("\0\0\0\x0CjP  \r\n\x87\n", 12), "JPEG 2000"},
     {"bigtiff.tif", std::string ("II+\0\x08\0\0\0", 8), "BigTIFF"},

@@ -38,6 +38,12 @@ std::string parseImageHeader (const unsigned char *data, std::size_t size, Image
   * \throws FrameError "path: problem" */
 std::vector<unsigned char> readImageBytes (const std::string &path, ImageHeader &header);
 
+/** \brief cv::imdecode of bytes that readImageBytes read; OpenCV's own refusals (it throws
+  * cv::Exception, e.g. past its pixel limit when it reads a header otherwise) become errors
+  * naming the file. \return an empty image where OpenCV cannot decode the bytes
+  * \throws FrameError "path: problem" */
+cv::Mat decodeImageBytes (const std::string &path, const std::vector<unsigned char> &bytes, int flags);
+
 /** \brief readImageBytes, then cv::imdecode with flags; the bytes are handed out if asked for.
   * \throws FrameError "path: problem", also when OpenCV cannot decode it */
 cv::Mat readImageFile (const std::string &path, int flags, std::vector<unsigned char> *bytes = nullptr);

@@ -1604,24 +1604,113 @@ toBonnView (const SensorModel &kinect, const SensorModel &bonn, SynthFrame &fram
 
 namespace
 {
-/** Distances left at 0: 1.5-3.5 m for one person (aimed at), 0.8-6 m for several. */
+/** Distances left at 0: 1.5-3.5 m for one person (aimed at), 0.8-6 m for several or a
+  * whole scene; camera heights left at 0: 0.8-1.6 m aimed, 0.6-2.5 m in whole scenes. */
 SynthOptions
 withDefaultDistances (SynthOptions options)
 {
-  const bool several = options.people > 1;
+  const bool whole = options.layout == SynthLayout::Whole;
+  const bool several = options.people > 1 || whole;
   if (options.min_distance == 0.0)
     options.min_distance = several ? 0.8 : 1.5;
   if (options.max_distance == 0.0)
     options.max_distance = several ? 6.0 : 3.5;
+  if (options.min_height == 0.0)
+    options.min_height = whole ? 0.6 : 0.8;
+  if (options.max_height == 0.0)
+    options.max_height = whole ? 2.5 : 1.6;
   return options;
 }
+
+/** A sensor's model at another frame size with the same field of view; the size must keep
+  * the aspect ratio of the sensor's pixels. */
+SensorModel
+atFrameSize (SensorModel model, int width, int height)
+{
+  if (width == 0 && height == 0)
+    return model;
+  if (width < 16 || height < 16 || width > 4096 || height > 4096)
+    throw std::invalid_argument ("the frame size must be 16-4096 pixels a side, got " + std::to_string (width) + "x" +
+                                 std::to_string (height));
+  if (std::abs (static_cast<double> (width) * model.height - static_cast<double> (height) * model.width) >
+      0.02 * model.width * model.height)
+    throw std::invalid_argument ("the frame size " + std::to_string (width) + "x" + std::to_string (height) +
+                                 " does not keep the sensor's aspect ratio (" + std::to_string (model.width) + "x" +
+                                 std::to_string (model.height) + ")");
+  const double sx = static_cast<double> (width) / model.width, sy = static_cast<double> (height) / model.height;
+  model.intrinsics.fx *= sx;
+  model.intrinsics.fy *= sy;
+  model.intrinsics.cx = (model.intrinsics.cx + 0.5) * sx - 0.5;
+  model.intrinsics.cy = (model.intrinsics.cy + 0.5) * sy - 0.5;
+  model.width = width;
+  model.height = height;
+  return model;
+}
+
+bool
+isShare (double value)
+{
+  return value >= 0.0 && value <= 1.0;
+}
+
+/** Why whole-scene options cannot be used, empty if they can. */
+std::string
+wholeSceneProblem (const SynthOptions &o)
+{
+  if (!(o.min_pitch_deg >= -89.0 && o.max_pitch_deg <= 89.0 && o.min_pitch_deg <= o.max_pitch_deg))
+    return "camera pitch must satisfy -89 <= min <= max <= 89 degrees";
+  if (!(o.max_roll_deg >= 0.0 && o.max_roll_deg <= 90.0))
+    return "camera roll must be 0-90 degrees";
+  if (!isShare (o.close_range_share))
+    return "the close-range share must be 0-1";
+  if (!isShare (o.background_removed_share))
+    return "the background-removed share must be 0-1";
+  if (!(o.border_share >= 0.0 && o.border_share <= 0.5))
+    return "the border share must be 0-0.5";
+  return {};
+}
 }  // namespace
+
+const char *
+synthLayoutName (SynthLayout layout)
+{
+  return layout == SynthLayout::Whole ? "whole" : "aimed";
+}
+
+bool
+parseSynthLayout (const std::string &name, SynthLayout &layout)
+{
+  if (name == "aimed")
+    layout = SynthLayout::Aimed;
+  else if (name == "whole")
+    layout = SynthLayout::Whole;
+  else
+    return false;
+  return true;
+}
 
 SynthGenerator::SynthGenerator (const SynthOptions &options_in)
   : options_ (withDefaultDistances (options_in)), sensor_ (sensorModel (options_in.sensor)),
     render_sensor_ (renderSensorModel (options_in.sensor))
 {
   const SynthOptions &options = options_;
+  if (options.width != 0 || options.height != 0)
+  {
+    if (options.sensor == SynthSensor::Bonn)
+      throw std::invalid_argument ("the bonn sensor's frames are its 144x176 portrait view; no other frame size");
+    sensor_ = atFrameSize (sensor_, options.width, options.height);
+    render_sensor_ = atFrameSize (render_sensor_, options.width, options.height);
+  }
+  if (!(options.min_height > 0.0 && options.max_height <= 10.0))
+    throw std::invalid_argument ("camera heights must lie in (0, 10] metres");
+  if (!(options.max_distance <= 20.0))
+    throw std::invalid_argument ("camera distances must be at most 20 metres");
+  if (options.layout == SynthLayout::Whole)
+  {
+    const std::string problem = wholeSceneProblem (options);
+    if (!problem.empty ())
+      throw std::invalid_argument (problem);
+  }
   if (options.motion_files.empty ())
     throw std::invalid_argument ("no motion files given");
   if (options.subjects < 1)
@@ -1741,6 +1830,8 @@ groupSequence (const std::vector<MotionClip> &clips, const std::vector<SynthPers
 SynthFrame
 SynthGenerator::render (std::uint64_t index) const
 {
+  if (options_.layout == SynthLayout::Whole)
+    return renderWhole (index);
   if (options_.people == 1)
     return renderOne (index);
   std::vector<BodyModel> bodies;
@@ -1851,6 +1942,14 @@ SynthFrame
 SynthGenerator::renderGroup (SynthRng &rng, std::uint64_t index, const std::vector<SynthPersonPlacement> &people,
                              const std::vector<BodyModel> *bodies) const
 {
+  return renderPlaced (rng, index, people, bodies, nullptr, true);
+}
+
+SynthFrame
+SynthGenerator::renderPlaced (SynthRng &rng, std::uint64_t index, const std::vector<SynthPersonPlacement> &people,
+                              const std::vector<BodyModel> *bodies, const Eigen::Isometry3d *world_to_camera,
+                              bool with_room) const
+{
   SynthFrame frame;
   frame.people = people;
   frame.clip = people.front ().clip;
@@ -1888,13 +1987,23 @@ SynthGenerator::renderGroup (SynthRng &rng, std::uint64_t index, const std::vect
 
   // The camera at the floor plan's origin, aimed along +z at the people's mean distance
   // and middle height, with a jitter (pan sigma ~3 degrees, 10 cm up or down), roll and pitch.
-  const double height = rng.uniform (options_.min_height, options_.max_height);
-  const Eigen::Vector3d camera (0.0, height, 0.0);
-  Eigen::Vector3d aim (0.0, mid_height, mean_distance);
-  aim.x () += rng.normal (0.0, 0.05 * mean_distance);
-  aim.y () += rng.normal (0.0, 0.1);
-  const double roll = rng.normal (0.0, 3.0) * M_PI / 180.0, pitch = rng.normal (0.0, 2.0) * M_PI / 180.0;
-  frame.world_to_camera = worldToCamera (camera, aim, roll, pitch);
+  Eigen::Vector3d camera, aim;
+  if (world_to_camera)
+  {
+    frame.world_to_camera = *world_to_camera;
+    camera = world_to_camera->inverse ().translation ();
+    aim = camera + world_to_camera->linear ().row (2).transpose ();
+  }
+  else
+  {
+    const double height = rng.uniform (options_.min_height, options_.max_height);
+    camera = Eigen::Vector3d (0.0, height, 0.0);
+    aim = Eigen::Vector3d (0.0, mid_height, mean_distance);
+    aim.x () += rng.normal (0.0, 0.05 * mean_distance);
+    aim.y () += rng.normal (0.0, 0.1);
+    const double roll = rng.normal (0.0, 3.0) * M_PI / 180.0, pitch = rng.normal (0.0, 2.0) * M_PI / 180.0;
+    frame.world_to_camera = worldToCamera (camera, aim, roll, pitch);
+  }
 
   // The room: walls behind the farthest person, clutter from 0.8 m in front of the
   // camera to the back wall, across the field of view.
@@ -1903,6 +2012,8 @@ SynthGenerator::renderGroup (SynthRng &rng, std::uint64_t index, const std::vect
   RoomFrame room;
   room.ahead = aim - camera;
   room.ahead.y () = 0.0;
+  if (room.ahead.norm () < 1e-6)  // looking straight down
+    room.ahead = Eigen::Vector3d::UnitZ ();
   room.ahead.normalize ();
   room.lateral = up.cross (room.ahead);
   room.camera = camera;
@@ -1911,9 +2022,12 @@ SynthGenerator::renderGroup (SynthRng &rng, std::uint64_t index, const std::vect
   room.people = &people_primitives;
   room.along_min = -(farthest - 0.8);
   room.across = std::max (1.8, (farthest + 1.0) * std::tan (0.5 * horizontalFieldOfView ()) + 0.5);
-  const double wall_behind = addFloorAndWalls (rng, room, world);
-  if (options_.clutter)
-    addGroupClutter (rng, room, wall_behind, world);
+  if (with_room)
+  {
+    const double wall_behind = addFloorAndWalls (rng, room, world);
+    if (options_.clutter)
+      addGroupClutter (rng, room, wall_behind, world);
+  }
 
   const SynthScene scene = world.transformed (frame.world_to_camera);
   renderScene (scene, render_sensor_, rng, frame);
@@ -1929,6 +2043,122 @@ SynthGenerator::renderGroup (SynthRng &rng, std::uint64_t index, const std::vect
   for (std::size_t k = 0; k < placed.size (); ++k)
     appendPersonLabels (placed[k].transformed (frame.world_to_camera), sensor_, first_primitive[k],
                         static_cast<int> (k + 1), frame);
+  return frame;
+}
+
+namespace
+{
+/** Makes every pixel off the people invalid, as a user's background removal does. */
+void
+removeBackground (SynthFrame &frame)
+{
+  const float nan = std::numeric_limits<float>::quiet_NaN ();
+  for (std::size_t i = 0; i < frame.cloud.size () && i < frame.object.size (); ++i)
+    if (frame.object[i] != SynthObject::Person)
+      frame.cloud[i].x = frame.cloud[i].y = frame.cloud[i].z = nan;
+}
+}  // namespace
+
+SynthFrame
+SynthGenerator::renderWhole (std::uint64_t index) const
+{
+  SynthRng rng = SynthRng::forItem (options_.seed, index);
+  const double degree = M_PI / 180.0;
+  const CameraIntrinsics &k = sensor_.intrinsics;
+  auto draw_pose = [&] (SynthPersonPlacement &p) {
+    p.clip = rng.index (static_cast<int> (clips_.size ()));
+    p.clip_frame = rng.index (clips_[static_cast<std::size_t> (p.clip)].motion.frameCount ());
+    p.subject = rng.index (static_cast<int> (subjects_.size ()));
+    p.facing = rng.uniform (0.0, 2.0 * M_PI);
+  };
+  auto floor_of = [&] (const SynthPersonPlacement &p) {
+    return floor_[static_cast<std::size_t> (p.clip)][static_cast<std::size_t> (p.subject)];
+  };
+  std::vector<SynthPersonPlacement> people;
+  std::vector<BodyModel> bodies;
+
+  if (rng.chance (options_.close_range_share))
+  {
+    // One upper body at arm's length: the camera at chest height looking at the torso,
+    // nothing else in the scene.
+    SynthPersonPlacement p;
+    draw_pose (p);
+    p.distance = rng.uniform (0.7, 1.6);
+    p.bearing = rng.normal (0.0, 0.05);
+    BodyModel body = this->body (p.clip, p.clip_frame, p.subject);
+    const double floor_y = floor_of (p);
+    const double top = body.highest - floor_y, torso = body.centre.y () - floor_y;
+    const Eigen::Vector3d spot = Eigen::Vector3d (-p.distance * std::sin (p.bearing), 0.0, p.distance * std::cos (p.bearing));
+    const Eigen::Vector3d camera (0.0, std::max (0.3, top - 0.35 + rng.normal (0.0, 0.1)), 0.0);
+    Eigen::Vector3d aim = spot + Eigen::Vector3d (rng.normal (0.0, 0.05), torso + 0.15 + rng.normal (0.0, 0.1), 0.0);
+    const Eigen::Isometry3d world_to_camera =
+        worldToCamera (camera, aim, rng.uniform (-options_.max_roll_deg, options_.max_roll_deg) * degree, 0.0);
+    people.push_back (p);
+    bodies.push_back (std::move (body));
+    return renderPlaced (rng, index, people, &bodies, &world_to_camera, false);
+  }
+
+  // The camera's pose first, then people wherever it sees them.
+  const double height = rng.uniform (options_.min_height, options_.max_height);
+  const double pitch = rng.uniform (options_.min_pitch_deg, options_.max_pitch_deg) * degree;
+  const double roll = rng.uniform (-options_.max_roll_deg, options_.max_roll_deg) * degree;
+  const Eigen::Vector3d camera (0.0, height, 0.0);
+  // worldToCamera's pitch turns the view down; ours is up positive.
+  const Eigen::Isometry3d world_to_camera = worldToCamera (camera, camera + Eigen::Vector3d::UnitZ (), roll, -pitch);
+  const double half_fov = 0.5 * horizontalFieldOfView ();
+  const double border = options_.border_share;
+  const int count = 1 + rng.index (options_.people);
+  std::vector<double> reach;
+  for (int n = 0; n < count; ++n)
+  {
+    SynthPersonPlacement p;
+    draw_pose (p);
+    BodyModel body = this->body (p.clip, p.clip_frame, p.subject);
+    const double r = horizontalReach (body), torso = body.centre.y () - floor_of (p);
+    // Where the torso must be seen: within the image grown by the border share.
+    auto seen = [&] (const SynthPersonPlacement &q) {
+      const Eigen::Vector3d c = world_to_camera * (placementSpot (q) + Eigen::Vector3d (0.0, torso, 0.0));
+      if (c.z () < 0.3)
+        return false;
+      const double u = k.fx * c.x () / c.z () + k.cx, v = k.fy * c.y () / c.z () + k.cy;
+      return u >= -border * sensor_.width && u <= (1.0 + border) * sensor_.width && v >= -border * sensor_.height &&
+             v <= (1.0 + border) * sensor_.height;
+    };
+    auto clear = [&] (const SynthPersonPlacement &q) {
+      for (std::size_t j = 0; j < people.size (); ++j)
+        if ((placementSpot (q) - placementSpot (people[j])).norm () < r + reach[j] + 0.1)
+          return false;
+      return true;
+    };
+    bool placed = false;
+    for (int attempt = 0; attempt < 100 && !placed; ++attempt)
+    {
+      p.distance = rng.uniform (options_.min_distance, options_.max_distance);
+      p.bearing = rng.uniform (-1.0, 1.0) * std::min (1.5, half_fov * (1.0 + 2.0 * border));
+      placed = seen (p) && clear (p);
+    }
+    if (!placed && !people.empty ())
+      continue;  // no room for another person in this view
+    people.push_back (p);  // the first person stays even if the view never showed them
+    reach.push_back (r);
+    bodies.push_back (std::move (body));
+  }
+  // Person 1 is the nearest, as in render ().
+  std::vector<std::size_t> order (people.size ());
+  std::iota (order.begin (), order.end (), 0);
+  std::stable_sort (order.begin (), order.end (),
+                    [&] (std::size_t a, std::size_t b) { return people[a].distance < people[b].distance; });
+  std::vector<SynthPersonPlacement> sorted;
+  std::vector<BodyModel> sorted_bodies;
+  for (const std::size_t i : order)
+  {
+    sorted.push_back (people[i]);
+    sorted_bodies.push_back (std::move (bodies[i]));
+  }
+  const bool background_removed = rng.chance (options_.background_removed_share);
+  SynthFrame frame = renderPlaced (rng, index, sorted, &sorted_bodies, &world_to_camera, true);
+  if (background_removed)
+    removeBackground (frame);
   return frame;
 }
 

@@ -387,6 +387,24 @@ void appendPersonLabels (const BodyModel &body_in_camera, const SensorModel &sen
 /** Half size of the label visibility window: 1 (3x3) for sr4000, 2 (5x5) for kinect. */
 int labelWindow (const SensorModel &sensor);
 
+/** How a frame's camera and people are laid out (doc/synthetic.md, "Whole scenes"). */
+enum class SynthLayout
+{
+  /** The camera aimed at the people (one: around them at any azimuth; several: in front),
+    * level within a few degrees: the frames of the earlier datasets. */
+  Aimed,
+  /** A camera of its own pose (height, pitch, roll drawn from their ranges) and 1 to
+    * `people` people anywhere in its view, some cut by the frame's borders; a share of the
+    * frames a close-range upper body without a room, and a share with the background
+    * removed: what a robot's or a ceiling camera sees. */
+  Whole
+};
+
+/** "aimed" or "whole". */
+const char *synthLayoutName (SynthLayout layout);
+/** Inverse of synthLayoutName; false for an unknown name. */
+bool parseSynthLayout (const std::string &name, SynthLayout &layout);
+
 /** Options of a synthetic run. */
 struct SynthOptions
 {
@@ -401,7 +419,24 @@ struct SynthOptions
   int people = 1;
   /** Camera to body (each person's), metres; 0: 1.5-3.5 for one person, 0.8-6 for several. */
   double min_distance = 0.0, max_distance = 0.0;
-  double min_height = 0.8, max_height = 1.6;      ///< camera above the floor, metres
+  /** Camera above the floor, metres; 0: 0.8-1.6 for aimed layouts, 0.6-2.5 for whole scenes. */
+  double min_height = 0.0, max_height = 0.0;
+  SynthLayout layout = SynthLayout::Aimed;
+  // Whole scenes only (layout Whole):
+  double min_pitch_deg = -35.0, max_pitch_deg = 10.0;  ///< camera pitch, degrees, up positive
+  double max_roll_deg = 10.0;                          ///< camera roll within +-this, degrees
+  /** Share of frames showing one person's upper body at 0.7-1.6 m, no room (the
+    * background already removed), as a robot's camera at arm's length sees them. */
+  double close_range_share = 0.15;
+  /** Share of the other frames whose pixels off every person are made invalid, as when a
+    * user removed the background before detection. */
+  double background_removed_share = 0.2;
+  /** How far beyond the image's edges a person's torso may stand, as a share of the image's
+    * width and height (people cut by the borders). */
+  double border_share = 0.15;
+  /** Frame size; 0: the sensor's own. Another size keeps the sensor's field of view (the
+    * intrinsics scale with it), so 320x240 is a Kinect frame at half resolution. */
+  int width = 0, height = 0;
   /** A MakeHuman directory (base.obj, default.mhskel, default_weights.mhw) for mesh
     * bodies (buildMeshBody); empty: capsule and ellipsoid bodies (buildBody). */
   std::string body_mesh;
@@ -449,6 +484,15 @@ private:
                           const std::vector<BodyModel> *bodies) const;
   /** Also returns each person's body (as body () gives it), in the placements' order. */
   std::vector<SynthPersonPlacement> drawPeople (std::uint64_t index, std::vector<BodyModel> &bodies) const;
+  /** A whole scene (SynthLayout::Whole): the camera's pose drawn first, then the people in
+    * its view. */
+  SynthFrame renderWhole (std::uint64_t index) const;
+  /** Renders people placed on the floor plan, seen by a camera of the given pose (null:
+    * aimed at them as render () aims for several people); room: the floor, walls and
+    * clutter (false: only the people). */
+  SynthFrame renderPlaced (SynthRng &rng, std::uint64_t index, const std::vector<SynthPersonPlacement> &people,
+                           const std::vector<BodyModel> *bodies, const Eigen::Isometry3d *world_to_camera,
+                           bool room) const;
   /** Horizontal field of view of the stored frames, radians. */
   double horizontalFieldOfView () const;
 

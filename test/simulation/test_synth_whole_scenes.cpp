@@ -165,8 +165,12 @@ TEST (SynthWholeScenes, CloseRangeAndBackgroundRemovedFramesShowOnlyPeople)
   {
     const agex::SynthFrame frame = removed.render (i);
     for (std::size_t p = 0; p < frame.cloud.size (); ++p)
+    {
       if (std::isfinite (frame.cloud[p].z))
+      {
         ASSERT_EQ (frame.object[p], agex::SynthObject::Person) << i;
+      }
+    }
     EXPECT_TRUE (anyOf (frame, agex::SynthObject::Person)) << i;
   }
 }

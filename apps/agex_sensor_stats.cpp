@@ -34,9 +34,18 @@ closedMask (const std::vector<std::uint8_t> &valid, int w, int h)
   return std::vector<std::uint8_t> (closed.datastart, closed.dataend);
 }
 
-agex::SynthSensor
-sensorNamed (const std::string &name)
+/** "kinect:9" = the kinect with a 9-pixel correlation window. */
+int
+windowOf (const std::string &name)
 {
+  const auto colon = name.find (':');
+  return colon == std::string::npos ? 1 : std::stoi (name.substr (colon + 1));
+}
+
+agex::SynthSensor
+sensorNamed (std::string name)
+{
+  name = name.substr (0, name.find (':'));
   agex::SynthSensor s;
   if (!agex::parseSynthSensor (name, s))
     throw std::runtime_error ("unknown sensor '" + name + "' (expected " + agex::synthSensorNames () + ")");
@@ -103,6 +112,7 @@ int
 limbs (int argc, char **argv)
 {
   agex::SensorModel model = agex::renderSensorModel (sensorNamed (argv[2]));
+  model.kinect_window = windowOf (argv[2]);
   if (argc >= 5)
     model = agex::scaledTo (model, std::stoi (argv[3]), std::stoi (argv[4]));
   std::cout << "forearm survival, " << argv[2] << " " << model.width << "x" << model.height << ":";

@@ -71,7 +71,7 @@ TimeOfFlightSensor::measureFrame (const IdealRender &ideal, SynthRng &rng, Synth
       const Eigen::Vector3d d = Eigen::Vector3d ((u - k.cx) / k.fx, (v - k.cy) / k.fy, 1.0).normalized ();
       const double z = r * d.z ();
       // Noise never carries a depth outside the range the sensor reports.
-      if (!(z > 0.0) /*CLIP*/)
+      if (!(z > 0.0) || r < m.min_range || r > m.max_range)
         continue;
       frame.cloud.points[i] = pointOnPixelRay (k, u, v, z);
     }

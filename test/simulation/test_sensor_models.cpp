@@ -269,7 +269,7 @@ TEST (SensorModels, DepthFrameStatisticsMeasureTheModels)
     agex::DepthFrameStatistics stats;
     stats.add (frame.cloud, mask);
     flying[sensor == agex::SynthSensor::Kinect] = stats.silhouetteFlyingRate ();
-    EXPECT_GT (stats.silhouetteSteps (), 100u);
+    EXPECT_GT (stats.silhouetteSteps (), 40u) << "most edge pixels are holes for the kinect";
   }
   EXPECT_GT (flying[0], 0.02);
   EXPECT_LT (flying[1], 0.005);

@@ -1,12 +1,14 @@
 // agex_sensor_stats: the statistics that tell depth sensors apart (agex::DepthFrameStatistics),
 // on real frames and on synthetic frames of each sensor model, for fitting the models
 // (doc/sensors.md).
-//   agex_sensor_stats real NAME FILE...      depth images (.u16, .png) or PCDs; a person mask
-//                                            only for frames whose background is zeroed (--masked)
+//   agex_sensor_stats real NAME [--masked|--segment] FILE...   depth images (.u16, .png) or
+//                 PCDs; person masks: --masked, the valid pixels (frames whose background is
+//                 zeroed); --segment, the persons agex::PersonSegmentation finds
 //   agex_sensor_stats synth SENSOR MOTION.bvh FRAMES [WIDTH HEIGHT]
 //   agex_sensor_stats limbs SENSOR [WIDTH HEIGHT]   forearm survival at 1-4 m
 //   agex_sensor_stats picture OUT.png REAL_FILE SENSOR MOTION.bvh FRAME [MIN_M MAX_M]
 //                                            the real frame beside a synthetic one, 240 px high
+#include <agex/filters/person_segmentation.h>
 #include <agex/io/frame_io.h>
 #include <agex/simulation/depth_frame_statistics.h>
 #include <agex/simulation/synthetic_scene.h>
@@ -56,13 +58,13 @@ int
 real (int argc, char **argv)
 {
   const std::string name = argv[2];
-  bool masked = false;
+  bool masked = false, segmented = false;
   agex::DepthFrameStatistics stats;
   for (int a = 3; a < argc; ++a)
   {
-    if (std::strcmp (argv[a], "--masked") == 0)
+    if (std::strcmp (argv[a], "--masked") == 0 || std::strcmp (argv[a], "--segment") == 0)
     {
-      masked = true;
+      (argv[a][2] == 'm' ? masked : segmented) = true;
       continue;
     }
     const agex::Frame frame = agex::loadFrame (argv[a]);
@@ -74,6 +76,18 @@ real (int argc, char **argv)
       for (std::size_t i = 0; i < valid.size (); ++i)
         valid[i] = std::isfinite (frame.cloud->points[i].z) ? 1 : 0;
       mask = closedMask (valid, w, h);
+    }
+    else if (segmented)
+    {
+      agex::PersonSegmentation<pcl::PointXYZ> segmentation;
+      segmentation.setInputCloud (frame.cloud);
+      std::vector<pcl::PointIndices> persons;
+      segmentation.segment (persons);
+      std::vector<std::uint8_t> person (frame.cloud->size (), 0);
+      for (const auto &p : persons)
+        for (const int i : p.indices)
+          person[static_cast<std::size_t> (i)] = 1;
+      mask = closedMask (person, w, h);
     }
     stats.add (*frame.cloud, mask);
   }
@@ -146,6 +160,32 @@ limbs (int argc, char **argv)
   std::cout << "\n";
   return 0;
 }
+/** Flat walls at 1-6.5 m, turned up to 50 degrees, through a sensor with disparity noise
+  * sigma_q (kinect) : what the flat-surface noise would be with that setting. */
+int
+walls (int argc, char **argv)
+{
+  agex::SensorModel model = agex::renderSensorModel (sensorNamed (argv[2]));
+  model.kinect_window = windowOf (argv[2]);
+  if (argc > 3)
+    model.kinect_sigma_q = std::stod (argv[3]);
+  agex::DepthFrameStatistics stats;
+  agex::SynthRng rng (5);
+  for (double z = 1.0; z < 6.6; z += 0.25)
+    for (int k = 0; k < 3; ++k)
+    {
+      const double yaw = rng.uniform (-0.9, 0.9), pitch = rng.uniform (-0.7, 0.7);
+      const Eigen::Vector3d n (std::sin (yaw) * std::cos (pitch), std::sin (pitch), std::cos (yaw) * std::cos (pitch));
+      agex::SynthScene scene;
+      scene.primitives.push_back (agex::SynthPrimitive::plane (n, n.z () * z, agex::SynthObject::Wall));
+      agex::SynthFrame frame;
+      agex::renderScene (scene, model, rng, frame);
+      stats.add (frame.cloud);
+    }
+  std::cout << stats.report (std::string ("walls-") + argv[2] + "-sigma_q" + (argc > 3 ? argv[3] : "default"));
+  return 0;
+}
+
 /** Depth coloured from near (blue) to far (red) over [lo, hi] metres, no depth black,
   * scaled to 240 pixels high. */
 cv::Mat
@@ -203,6 +243,8 @@ main (int argc, char **argv)
       return synth (argc, argv);
     if (mode == "limbs" && argc >= 3)
       return limbs (argc, argv);
+    if (mode == "walls" && argc >= 3)
+      return walls (argc, argv);
     if (mode == "picture")
       return picture (argc, argv);
     std::cerr << "usage: agex_sensor_stats real NAME [--masked] FILE... | synth SENSOR MOTION.bvh FRAMES | "

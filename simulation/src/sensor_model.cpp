@@ -100,6 +100,10 @@ sensorModel (SynthSensor sensor)
     // The correlation window's settings as fitted in doc/sensors.md; the window itself is
     // off (1) until the label tests follow surfaces it substitutes: set 9 to use it.
     m.kinect_window = 1;
+    // Holes along depth edges: fitted to the hole rate of the 2-pixel band inside the
+    // person's outline in five_people and Bonn (0.036, 0.044; doc/sensors.md).
+    m.kinect_edge_drop = 0.15;
+    m.kinect_edge_drop_near = 0.05;
     m.kinect_foreground_weight = 1.5;
     m.kinect_min_support = 0.5;
   }

@@ -6,8 +6,8 @@
 //                 zeroed); --segment, the persons agex::PersonSegmentation finds
 //   agex_sensor_stats synth SENSOR MOTION.bvh FRAMES [WIDTH HEIGHT]
 //   agex_sensor_stats limbs SENSOR [WIDTH HEIGHT]   forearm survival at 1-4 m
-//   agex_sensor_stats picture OUT.png REAL_FILE SENSOR MOTION.bvh FRAME [MIN_M MAX_M]
-//                                            the real frame beside a synthetic one, 240 px high
+//   agex_sensor_stats picture OUT.png REAL_FILE SENSOR MOTION.bvh FRAME [MIN_M MAX_M [NEAR_M FAR_M]]
+//                 the real frame beside a synthetic one (person NEAR-FAR m away), 240 px high
 #include <agex/filters/person_segmentation.h>
 #include <agex/io/frame_io.h>
 #include <agex/simulation/depth_frame_statistics.h>
@@ -221,6 +221,11 @@ picture (int argc, char **argv)
   options.sensor = sensorNamed (argv[4]);
   options.motion_files = {argv[5]};
   options.seed = 3;
+  if (argc > 10)  // the synthetic person's distance, to match the real frame's
+  {
+    options.min_distance = std::stod (argv[9]);
+    options.max_distance = std::stod (argv[10]);
+  }
   const agex::SynthGenerator gen (options);
   const agex::SynthFrame frame = gen.render (static_cast<std::uint64_t> (std::stoi (argv[6])));
   cv::Mat both;

@@ -76,13 +76,13 @@ parseSynthFlags (int argc, char **argv, SynthFlags &flags)
 {
   SynthOptions &options = flags.options;
   po::options_description general (
-      "agex_synth --motion FILE... --frames N --sensor sr4000|kinect|bonn --seed S --output DIR [options]\n"
+      "agex_synth --motion FILE... --frames N --sensor sr4000|kinect|kinect2|bonn --seed S --output DIR [options]\n"
       "Renders labelled depth frames of people posed by BVH motion capture and writes an agex dataset");
   general.add_options () ("help,h", "show this help")
     ("motion", po::value (&options.motion_files)->multitoken (), "BVH motion files (CMU skeletons)")
     ("frames", po::value (&flags.frames), "number of frames to render")
-    ("sensor", po::value (&flags.sensor)->default_value (flags.sensor), "sensor model: sr4000 (144x176 time of flight), kinect (640x480) or bonn (kinect in the Bonn frames' 8-bit "
-     "depth steps and 144x176 portrait view)")
+    ("sensor", po::value (&flags.sensor)->default_value (flags.sensor), "sensor model: sr4000 (144x176 time of flight), kinect (640x480 structured light), kinect2 (512x424 time "
+     "of flight) or bonn (kinect in the Bonn frames' 8-bit depth steps and 144x176 portrait view)")
     ("seed", po::value (&options.seed)->default_value (options.seed), "random seed; the same seed gives the same bytes")
     ("output", po::value (&flags.output), "dataset directory to write")
     ("force", po::bool_switch (&flags.force), "replace an existing output directory")
@@ -149,7 +149,7 @@ parseSynthFlags (int argc, char **argv, SynthFlags &flags)
   if (options.people < 1 || options.people > 4)
     throw std::runtime_error ("--people must be 1-4, got " + std::to_string (options.people));
   if (!parseSynthSensor (flags.sensor, options.sensor))
-    throw std::runtime_error ("unknown --sensor '" + flags.sensor + "' (expected sr4000, kinect or bonn)");
+    throw std::runtime_error ("unknown --sensor '" + flags.sensor + "' (expected " + synthSensorNames () + ")");
   options.bvh_scale = parseBvhScale (flags.bvh_scale);
   if (!parseSynthLayout (flags.layout, options.layout))
     throw std::runtime_error ("unknown --layout '" + flags.layout + "' (expected aimed or whole)");

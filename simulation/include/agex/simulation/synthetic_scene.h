@@ -3,13 +3,16 @@
 // partly hiding each other) posed by real motion capture (BVH), a body made of capsules
 // and ellipsoids on the skeleton or the MakeHuman mesh, a room
 // (floor, back wall, optional side wall, clutter boxes or a desk), a randomly
-// placed camera, a ray-casting renderer and two sensor models:
-//   sr4000  144x176 portrait time-of-flight: 3x3 supersampling whose samples are
-//           blended as the sensor blends returns (mixed pixels at silhouettes),
-//           range noise growing as the returned amplitude falls (~depth^2)
-//   kinect  640x480 structured light: disparity quantisation and noise (depth
-//           steps grow with depth^2), projector shadows and holes at depth edges,
-//           no mixed pixels
+// placed camera, a ray-casting renderer (renderer.h) and sensor models (sensor_model.h,
+// one class each: depth_sensor.h):
+//   sr4000   144x176 portrait time-of-flight: 3x3 supersampling whose samples are
+//            blended as the sensor blends returns (mixed pixels at silhouettes),
+//            range noise growing as the returned amplitude falls (~depth^2)
+//   kinect2  512x424 time of flight (Kinect v2-like), the same kind of model
+//   kinect   640x480 structured light: disparity quantisation and noise (depth
+//            steps grow with depth^2), projector shadows, the correlation window
+//            (thin limbs thin out, silhouettes round off) and holes at depth edges
+//   bonn     a kinect frame in the Bonn frames' 8-bit depth and 144x176 portrait view
 // head / hand / foot tip labels (agex::PartLabel) with a depth-test visibility, and an
 // exact per-pixel part label (agex::SynthPart) of the surface each depth pixel shows.
 //
@@ -20,6 +23,7 @@
 
 #include <agex/simulation/bvh.h>
 #include <agex/simulation/scene_primitives.h>
+#include <agex/simulation/sensor_model.h>
 #include <agex/simulation/synth_rng.h>
 #include <agex/io/dataset.h>
 #include <agex/io/frame_io.h>
@@ -43,49 +47,6 @@
 namespace agex
 {
 // ---------------------------------------------------------------------------
-// Sensors
-
-enum class SynthSensor
-{
-  Sr4000,
-  Kinect,
-  Bonn  ///< the Bonn frames' look: kinect, 8-bit depth in 1.6 cm steps, their 144x176 portrait view
-};
-
-/** "sr4000", "kinect" or "bonn". */
-const char *synthSensorName (SynthSensor sensor);
-/** Inverse of synthSensorName; false for an unknown name. */
-bool parseSynthSensor (const std::string &name, SynthSensor &sensor);
-
-/** The image a sensor model produces and its noise parameters (doc/synthetic.md). The
-  * bonn model's image is the 144x176 portrait view (bonnPortraitView) of a kinect
-  * frame; it is rendered with renderSensorModel(Bonn), the kinect model. */
-struct SensorModel
-{
-  SynthSensor sensor = SynthSensor::Sr4000;
-  int width = 144, height = 176;
-  CameraIntrinsics intrinsics;
-  int supersample = 3;           ///< samples per pixel side (sr4000: 3x3, blended)
-  double min_range = 0.1, max_range = 5.0;  ///< metres; outside -> NaN
-  // sr4000 (time of flight): sigma = tof_sigma0 + tof_sigma_k / amplitude, with
-  // amplitude = reflectivity * cos(incidence) / range^2 averaged over the samples.
-  double tof_sigma0 = 0.001, tof_sigma_k = 0.0008, tof_sigma_max = 0.05;
-  double tof_min_amplitude = 0.008;  ///< below: NaN (the sensor's confidence cut)
-  // kinect (structured light): disparity in 1/8 px, q = 8 * f_ir * b / z, with
-  // noise sigma_q, rounded; z = 8 f_ir b / q. Projector at +b along x.
-  double kinect_f_ir = 580.0, kinect_baseline = 0.075, kinect_sigma_q = 0.5;
-  double kinect_min_cos = 0.12;       ///< incidence flatter than this: NaN
-  double kinect_edge_drop = 0.6;      ///< NaN chance of a pixel at a depth edge
-  double kinect_edge_drop_near = 0.2; ///< ... of a pixel beside one
-};
-
-/** The model of a sensor with its default parameters: the frames it writes. */
-SensorModel sensorModel (SynthSensor sensor);
-/** The model a sensor's frames are rendered with (kinect for bonn, else sensorModel). */
-SensorModel renderSensorModel (SynthSensor sensor);
-
-/** Depth step of the Bonn frames: 8-bit grey levels of 0.016 m (../shared/README.md). */
-constexpr double kBonnDepthStep = 0.016;
 
 // ---------------------------------------------------------------------------
 // Bodies

@@ -251,7 +251,7 @@ ProceduralPoses::make (ArmPose arms, LegPose legs, SynthRng &rng)
     PoseTargets &t = b.targets ();
     const int side = rng.index (2);  // the one arm / the leading leg
     auto relaxed = [&] (int s) { b.armAngles (s, b.u (5, 25), b.u (0, 60), b.u (5, 40), forward, forward); };
-    auto raised = [&] (int s) { b.armAngles (s, b.u (130, 178), b.u (0, 90), b.u (0, 40), forward, forward); };
+    auto raised = [&] (int s) { b.armAngles (s, b.u (145, 178), b.u (0, 90), b.u (0, 30), forward, forward); };
     const Eigen::Matrix3d &c = b.chest ();
     const Eigen::Matrix3d &pv = b.pelvis ();
     auto jitter = [&] (double r) { return Eigen::Vector3d (b.u (-r, r), b.u (-r, r), b.u (-r, r)); };

@@ -224,6 +224,22 @@ PoseBank::thin (double metres)
   pose_source_ = std::move (sources);
 }
 
+PoseBank
+poseBankOf (const SynthOptions &options)
+{
+  PoseBank bank;
+  for (const auto &path : options.motion_files)
+    bank.addFile (path);
+  for (const auto &dir : options.pose_dirs)
+    bank.addDirectory (dir);
+  if (options.procedural_poses > 0)
+    bank.addProcedural (options.procedural_poses, options.seed);
+  if (bank.size () == 0)
+    throw std::invalid_argument ("the pose bank has no poses (every frame of its files was dropped)");
+  bank.thin (options.thin_poses);
+  return bank;
+}
+
 MotionClip
 PoseBank::clip (const std::string &name) const
 {
@@ -284,12 +300,12 @@ PoseBank::handSpread () const
 void
 PoseBank::writeSpreadImage (const std::string &path) const
 {
-  // Two panels, front (x, y) and top (x, z), 2.4 m wide, 0.4 m per 100 px... 200 px per metre.
+  // Two panels, front (x, y) and top (x, z), 2.4 m across each, the legend below.
   const int panel = 440, ppm = 180;
-  cv::Mat image (panel + 30, 2 * panel, CV_8UC3, cv::Scalar (255, 255, 255));
+  cv::Mat image (panel + 60, 2 * panel, CV_8UC3, cv::Scalar (255, 255, 255));
   const cv::Scalar colours[] = {{200, 80, 30}, {40, 140, 40}, {30, 60, 220}, {160, 60, 160}, {20, 160, 200}, {90, 90, 90}};
   auto front = [&] (const Eigen::Vector3d &p) {
-    return cv::Point (panel / 2 + static_cast<int> (p.x () * ppm), 30 + panel / 2 - static_cast<int> ((p.y () - 0.3) * ppm));
+    return cv::Point (panel / 2 + static_cast<int> (p.x () * ppm), 30 + panel / 2 - static_cast<int> (p.y () * ppm));
   };
   auto top = [&] (const Eigen::Vector3d &p) {
     return cv::Point (panel + panel / 2 + static_cast<int> (p.x () * ppm), 30 + panel / 2 - static_cast<int> (p.z () * ppm));
@@ -318,13 +334,11 @@ PoseBank::writeSpreadImage (const std::string &path) const
   cv::putText (image, "front (x out, y up)", cv::Point (8, 22), cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar (0, 0, 0), 1);
   cv::putText (image, "top (x out, z forward)", cv::Point (panel + 8, 22), cv::FONT_HERSHEY_SIMPLEX, 0.5,
                cv::Scalar (0, 0, 0), 1);
-  int x = 220;
-  for (std::size_t s = 0; s < sources_.size (); ++s)
+  int x = 8;
+  for (std::size_t s = 0; s < sources_.size () && x < 2 * panel - 40; ++s)
   {
-    cv::putText (image, sources_[s].name, cv::Point (x, 22), cv::FONT_HERSHEY_SIMPLEX, 0.5, colours[s % 6], 1);
-    x += 12 + 9 * static_cast<int> (sources_[s].name.size ());
-    if (x > panel - 40 && x < panel + 220)
-      x = panel + 220;
+    cv::putText (image, sources_[s].name, cv::Point (x, panel + 50), cv::FONT_HERSHEY_SIMPLEX, 0.5, colours[s % 6], 1);
+    x += 16 + 10 * static_cast<int> (sources_[s].name.size ());
   }
   bool written = false;
   try

@@ -94,4 +94,9 @@ private:
   std::vector<int> pose_source_;
   std::vector<PoseSource> sources_;
 };
+
+/** \brief The pose bank a generator's options ask for: their motion files, pose
+  * directories and procedural poses (seeded with options.seed), thinned by thin_poses.
+  * \throws BvhError naming a bad file, std::invalid_argument if no pose is left */
+PoseBank poseBankOf (const SynthOptions &options);
 }  // namespace agex

@@ -150,8 +150,7 @@ PoseSkeleton::offset (int joint)
 double
 PoseSkeleton::standingHeight ()
 {
-  // Head End Site above the toes' sole (the toe base is 0.055 above the sole... the
-  // ankle 0.08 m): hips 0.90 + back 0.34 + neck 0.28 + head 0.20, soles at 0.
+  // Soles at 0 (the ankle 0.08 m up), hips 0.90, back 0.34, neck and head 0.28, to the head's End Site.
   return 0.90 + 0.08 + 0.12 + 0.14 + 0.18 + 0.10 + kHeadEnd.y ();
 }
 

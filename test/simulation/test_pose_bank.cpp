@@ -255,4 +255,29 @@ TEST (PoseBank, RefusesBadInputs)
   }
   EXPECT_EQ (bank.size (), 0);
 }
+TEST (PoseBank, GeneratorDrawsFromTheBankWithPeopleOnTheFloor)
+{
+  agex::SynthOptions options;
+  options.procedural_poses = 22;
+  options.thin_poses = 0.02;
+  options.sensor = agex::SynthSensor::Kinect;
+  options.seed = 4;
+  const agex::SynthGenerator generator (options);
+  ASSERT_EQ (generator.clips ().size (), 1u);
+  const int poses = generator.clips ()[0].motion.frameCount ();
+  EXPECT_GE (poses, 18);
+  EXPECT_LE (poses, 22);
+  // Every pose stands on the floor (y = 0): the body's lowest point within 4 cm of it.
+  for (int f = 0; f < poses; ++f)
+    EXPECT_NEAR (generator.body (0, f, 0).lowest, 0.0, 0.04) << f;
+  const agex::SynthFrame frame = generator.render (0);
+  EXPECT_EQ (frame.labels.size (), 5u);
+
+  agex::SynthOptions bad = options;
+  bad.thin_poses = 2.0;
+  EXPECT_THROW (agex::SynthGenerator {bad}, std::invalid_argument);
+  bad = options;
+  bad.procedural_poses = -1;
+  EXPECT_THROW (agex::SynthGenerator {bad}, std::invalid_argument);
+}
 }  // namespace

@@ -6,9 +6,12 @@
 #include <agex/apps/output_guard.h>
 #include <agex/apps/synth_flags.h>
 #include <agex/io/atomic_file.h>
+#include <agex/simulation/pose_bank.h>
 #include <agex/simulation/synthetic_scene.h>
 
 #include <algorithm>
+#include <cstdio>
+
 #include <iostream>
 
 int
@@ -19,6 +22,28 @@ main (int argc, char **argv)
   {
     if (!agex::apps::parseSynthFlags (argc, argv, flags))
       return 0;
+    if (!flags.pose_report.empty ())
+    {
+      const agex::PoseBank bank = agex::poseBankOf (flags.options);
+      for (const auto &s : bank.sources ())
+        std::cout << "pose bank: " << s.name << ": " << s.raw << " poses read, " << s.dropped << " dropped, " << s.kept
+                  << " kept\n";
+      std::cout << "pose bank: " << bank.size () << " poses after thinning to " << flags.options.thin_poses << " m\n";
+      for (const auto &h : bank.handSpread ())
+      {
+        char line[320];
+        std::snprintf (line, sizeof line,
+                       "hands %s: n=%d mean (out %.2f, up %.2f, fwd %.2f) sd (%.2f, %.2f, %.2f) above head %.1f%% "
+                       "forward>0.35 %.1f%% behind %.1f%% across %.1f%%\n",
+                       h.source.c_str (), h.hands, h.mean.x (), h.mean.y (), h.mean.z (), h.sd.x (), h.sd.y (), h.sd.z (),
+                       100 * h.above_head, 100 * h.forward, 100 * h.behind, 100 * h.across);
+        std::cout << line;
+      }
+      bank.writeSpreadImage (flags.pose_report);
+      std::cout << flags.pose_report << ": hand positions written\n";
+      if (flags.report_only)
+        return 0;
+    }
     std::vector<std::string> inputs = flags.options.motion_files;
     if (!flags.options.body_mesh.empty ())
       inputs.push_back (flags.options.body_mesh);

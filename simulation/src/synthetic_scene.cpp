@@ -1,4 +1,5 @@
 #include <agex/simulation/synthetic_scene.h>
+#include <agex/simulation/pose_bank.h>
 
 #include <agex/simulation/bonn_sensor.h>
 #include <agex/simulation/camera_pose.h>
@@ -599,8 +600,13 @@ SynthGenerator::SynthGenerator (const SynthOptions &options_in)
     if (!problem.empty ())
       throw std::invalid_argument (problem);
   }
-  if (options.motion_files.empty ())
+  const bool pose_bank = !options.pose_dirs.empty () || options.procedural_poses > 0;
+  if (options.motion_files.empty () && !pose_bank)
     throw std::invalid_argument ("no motion files given");
+  if (options.procedural_poses < 0 || options.procedural_poses > 100000)
+    throw std::invalid_argument ("procedural poses must be 0-100000, got " + std::to_string (options.procedural_poses));
+  if (!(options.thin_poses >= 0.0 && options.thin_poses <= 1.0))
+    throw std::invalid_argument ("the pose thinning distance must be 0-1 m, got " + std::to_string (options.thin_poses));
   if (options.subjects < 1)
     throw std::invalid_argument ("the number of subjects must be at least 1");
   if (options.people < 1 || options.people > 4)
@@ -611,18 +617,27 @@ SynthGenerator::SynthGenerator (const SynthOptions &options_in)
     throw std::invalid_argument ("camera heights must satisfy min <= max");
   if (options.colour && options.sensor == SynthSensor::Bonn)
     throw std::invalid_argument ("colour frames need sensor sr4000 or kinect (bonn frames are a grey depth view)");
-  for (const auto &path : options.motion_files)
-    clips_.push_back (MotionClip::load (path, options.bvh_scale));
+  if (pose_bank)
+    clips_.push_back (poseBankOf (options).clip ());
+  else
+    for (const auto &path : options.motion_files)
+      clips_.push_back (MotionClip::load (path, options.bvh_scale));
   SynthRng rng = SynthRng::forItem (options.seed, ~0ull);
   for (int s = 0; s < options.subjects; ++s)
     subjects_.push_back (BodyParams::random (rng));
   if (!options.body_mesh.empty ())
     mesh_ = std::make_shared<const HumanMesh> (HumanMesh::load (options.body_mesh));
-  // The floor of a clip for a subject: the lowest the body gets over the whole clip.
+  // The floor of a clip for a subject: the lowest the body gets over the whole clip; the
+  // bank stands every pose on y = 0 itself.
   floor_.resize (clips_.size ());
   for (std::size_t c = 0; c < clips_.size (); ++c)
     for (const auto &params : subjects_)
     {
+      if (pose_bank)
+      {
+        floor_[c].push_back (0.0);
+        continue;
+      }
       double lowest = kInf;
       for (int f = 0; f < clips_[c].motion.frameCount (); ++f)
         lowest = std::min (lowest, mesh_ ? meshBodyLowest (clips_[c], f, params, *mesh_)

@@ -121,6 +121,9 @@ S=$BIN/agex_synth
 check "truncated BVH motion" 1 "truncated.bvh:5: " $S --motion in/truncated.bvh --frames 3 --sensor sr4000 --output out/synth
 check "missing BVH motion" 1 "nope.bvh: cannot open BVH file" $S --motion in/nope.bvh --frames 3 --output out/synth
 check "unknown sensor" 1 "unknown --sensor .nosuch." $S --motion in/truncated.bvh --frames 3 --sensor nosuch --output out/synth
+check "procedural poses out of range" 1 "--procedural-poses must be 0-100000, got -1" $S --procedural-poses -1 --frames 3 --output out/synth
+check "pose thinning out of range" 1 "--thin-poses must be 0-1 metres" $S --procedural-poses 10 --thin-poses 2 --frames 3 --output out/synth
+check "missing pose directory" 1 "nope: not a directory of BVH files" $S --pose-dir in/nope --frames 3 --output out/synth
 check "train on a dataset without labels" 1 "no training examples: no labelled frame with a body" $T --dataset in/dataset --out out/model.yml
 check "train on a damaged labels.csv" 1 "labels.csv:2: expected 15" $T --dataset in/ds_truncated_labels --out out/model.yml
 [ ! -e out/synth ] && [ ! -e out/model.yml ] || { echo "FAILED: a failed run left an output" >&2; failures=$((failures + 1)); }

@@ -124,6 +124,16 @@ parseSynthFlags (int argc, char **argv, SynthFlags &flags)
     ("body-mesh", po::value (&options.body_mesh),
      "MakeHuman directory (base.obj, default.mhskel, default_weights.mhw, e.g. ../shared/data/makehuman): skinned mesh "
      "bodies instead of capsules")
+    ("pose-dir", po::value (&options.pose_dirs)->composing (),
+     "directory of BVH files (Character Creator CC_Base_* or CMU skeletons) for the pose bank; repeatable. With "
+     "--pose-dir or --procedural-poses, frames draw their pose from one bank of the --motion files, these and the "
+     "procedural poses")
+    ("procedural-poses", po::value (&options.procedural_poses)->default_value (0),
+     "procedural poses in the pose bank, 0-100000 (hands on hips, arms raised, pointing, seated, ...)")
+    ("thin-poses", po::value (&options.thin_poses)->default_value (0.0),
+     "keep only pose bank poses farther apart than this, metres 0-1 (largest joint distance; 0 keeps all)")
+    ("pose-report", po::value (&flags.pose_report),
+     "write a PNG of the pose bank's hand positions and print its sizes and spread; without --frames, only that")
     ("colour", po::bool_switch (&options.colour),
      "also paint each frame in colour (random clothes, room and light; sr4000 and kinect): XYZRGBA frames for "
      "agex_annotate rgbd; the depth stays the same");
@@ -140,8 +150,17 @@ parseSynthFlags (int argc, char **argv, SynthFlags &flags)
   if (given.count ("config"))
     po::store (parseSynthConfigFile (given["config"].as<std::string> (), general), given);
   po::notify (given);
-  if (options.motion_files.empty ())
-    throw std::runtime_error ("no --motion BVH files given (see --help)");
+  if (options.motion_files.empty () && options.pose_dirs.empty () && options.procedural_poses == 0)
+    throw std::runtime_error ("no --motion BVH files, --pose-dir or --procedural-poses given (see --help)");
+  if (options.procedural_poses < 0 || options.procedural_poses > 100000)
+    throw std::runtime_error ("--procedural-poses must be 0-100000, got " + std::to_string (options.procedural_poses));
+  if (!(options.thin_poses >= 0.0 && options.thin_poses <= 1.0))
+    throw std::runtime_error ("--thin-poses must be 0-1 metres, got " + std::to_string (options.thin_poses));
+  if (!flags.pose_report.empty () && options.pose_dirs.empty () && options.procedural_poses == 0)
+    throw std::runtime_error ("--pose-report needs a pose bank (--pose-dir or --procedural-poses)");
+  flags.report_only = !flags.pose_report.empty () && flags.frames == 0 && flags.output.empty ();
+  if (flags.report_only)
+    return true;
   if (flags.frames < 1)
     throw std::runtime_error ("--frames must be at least 1");
   if (flags.output.empty ())

@@ -291,6 +291,13 @@ struct SynthOptions
   bool colour = false;
   /** Desks, chairs, shelves and boxes in the room (walls and the floor always). */
   bool clutter = true;
+  /** Pose bank (PoseBank, doc/synthetic.md "Pose bank"): with directories of BVH files
+    * or procedural poses, the motion files, the directories' files and the procedural
+    * poses become one bank on the pose skeleton, thinned to poses thin_poses metres apart
+    * (0: all kept), and frames draw their pose from it. */
+  std::vector<std::string> pose_dirs;
+  int procedural_poses = 0;     ///< 0-100000
+  double thin_poses = 0.0;      ///< metres, 0-1
 };
 
 /** Draws and renders frames; frame i depends only on the options and i. */

@@ -21,6 +21,8 @@ struct SynthFlags
   std::string output;
   int frames = 0;
   bool force = false;
+  std::string pose_report;   ///< PNG of the pose bank's spread, empty for none
+  bool report_only = false;  ///< --pose-report without --frames and --output
 };
 
 /** \brief Parses agex_synth's command line into flags and checks them.

@@ -60,6 +60,9 @@ parseSynthFlags (int argc, char **argv, SynthFlags &flags)
     ("body-mesh", po::value (&options.body_mesh),
      "MakeHuman directory (base.obj, default.mhskel, default_weights.mhw, e.g. ../shared/data/makehuman): skinned mesh "
      "bodies instead of capsules")
+    ("body-shapes", po::bool_switch (&options.body_shapes),
+     "with --body-mesh: give each subject its own MakeHuman body shape (gender, age, muscle, weight, height; "
+     "targets/macrodetails of the --body-mesh directory), 1.5-2.0 m tall, slim to heavy")
     ("colour", po::bool_switch (&options.colour),
      "also paint each frame in colour (random clothes, room and light; sr4000 and kinect): XYZRGBA frames for "
      "agex_annotate rgbd; the depth stays the same");

@@ -8,6 +8,7 @@
 #include <agex/io/atomic_file.h>
 #include <agex/simulation/synthetic_scene.h>
 
+#include <algorithm>
 #include <iostream>
 
 int
@@ -37,7 +38,8 @@ main (int argc, char **argv)
               << generator.sensor ().width << "x" << generator.sensor ().height << "), " << stats.visible_labels
               << " of " << stats.labels << " labels visible\n"
               << "  render " << stats.render_ms / stats.frames << " ms/frame, write "
-              << stats.write_ms / stats.frames << " ms/frame\n";
+              << stats.write_ms / stats.frames << " ms/frame: "
+              << 1000.0 * stats.frames / std::max (1e-9, stats.render_ms + stats.write_ms) << " frames/s on one thread\n";
     return 0;
   }
   catch (const std::exception &e)

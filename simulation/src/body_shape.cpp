@@ -1,5 +1,5 @@
 #include <agex/simulation/body_shape.h>
-#include <agex/simulation/synthetic_scene.h>
+#include <agex/simulation/synth_rng.h>
 
 #include <algorithm>
 #include <cmath>

@@ -633,7 +633,9 @@ TEST (SynthKinect, VgaWithQuantisedDepthEdgeHolesAndNoMixedPixels)
   EXPECT_EQ (unquantised, 0u);
   ASSERT_GT (edge_pixels, 500u);
   ASSERT_GT (inner_pixels, 5000u);
-  EXPECT_GT (static_cast<double> (edge_holes) / edge_pixels, 0.25) << "holes along depth edges";
+  // Edge holes as fitted on real frames (doc/sensors.md: 4% of the band inside the outline),
+  // plus projector shadows beside the person.
+  EXPECT_GT (static_cast<double> (edge_holes) / edge_pixels, 0.05) << "holes along depth edges";
   EXPECT_LT (static_cast<double> (inner_holes) / inner_pixels, 0.05) << "few holes inside the body";
 }
 

@@ -5,6 +5,9 @@
 #include <boost/program_options.hpp>
 
 #include <charconv>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
 #include <cmath>
 #include <stdexcept>
 
@@ -28,6 +31,44 @@ parseBvhScale (const std::string &text)
                               "'");
   return value;
 }
+
+/** "WxH" into width and height, each 16-4096. */
+void
+parseResolution (const std::string &text, int &width, int &height)
+{
+  const auto x = text.find ('x');
+  auto number = [&] (const std::string &part, int &value) {
+    const auto result = std::from_chars (part.data (), part.data () + part.size (), value);
+    return result.ec == std::errc () && result.ptr == part.data () + part.size () && value >= 16 && value <= 4096;
+  };
+  if (x == std::string::npos || !number (text.substr (0, x), width) || !number (text.substr (x + 1), height))
+    throw std::runtime_error ("--resolution must be WxH with 16-4096 pixels a side (e.g. 320x240), got '" + text + "'");
+}
+
+/** A config file's flags; the file is read whole, at most 64 KiB, and named in every error. */
+po::parsed_options
+parseSynthConfigFile (const std::string &path, const po::options_description &options)
+{
+  constexpr std::uintmax_t kMaxConfigBytes = 64 * 1024;
+  std::error_code error;
+  const auto size = std::filesystem::file_size (path, error);
+  if (error || !std::filesystem::is_regular_file (path))
+    throw std::runtime_error ("--config " + path + ": cannot read it (not a regular file)");
+  if (size > kMaxConfigBytes)
+    throw std::runtime_error ("--config " + path + ": " + std::to_string (size) + " bytes, more than a config file of " +
+                              std::to_string (kMaxConfigBytes) + " holds");
+  std::ifstream in (path);
+  if (!in)
+    throw std::runtime_error ("--config " + path + ": cannot open it");
+  try
+  {
+    return po::parse_config_file (in, options);
+  }
+  catch (const po::error &e)
+  {
+    throw std::runtime_error ("--config " + path + ": " + e.what ());
+  }
+}
 }  // namespace
 
 bool
@@ -35,13 +76,13 @@ parseSynthFlags (int argc, char **argv, SynthFlags &flags)
 {
   SynthOptions &options = flags.options;
   po::options_description general (
-      "agex_synth --motion FILE... --frames N --sensor sr4000|kinect|bonn --seed S --output DIR [options]\n"
+      "agex_synth --motion FILE... --frames N --sensor sr4000|kinect|kinect2|bonn --seed S --output DIR [options]\n"
       "Renders labelled depth frames of people posed by BVH motion capture and writes an agex dataset");
   general.add_options () ("help,h", "show this help")
     ("motion", po::value (&options.motion_files)->multitoken (), "BVH motion files (CMU skeletons)")
     ("frames", po::value (&flags.frames), "number of frames to render")
-    ("sensor", po::value (&flags.sensor)->default_value (flags.sensor), "sensor model: sr4000 (144x176 time of flight), kinect (640x480) or bonn (kinect in the Bonn frames' 8-bit "
-     "depth steps and 144x176 portrait view)")
+    ("sensor", po::value (&flags.sensor)->default_value (flags.sensor), "sensor model: sr4000 (144x176 time of flight), kinect (640x480 structured light), kinect2 (512x424 time "
+     "of flight) or bonn (kinect in the Bonn frames' 8-bit depth steps and 144x176 portrait view)")
     ("seed", po::value (&options.seed)->default_value (options.seed), "random seed; the same seed gives the same bytes")
     ("output", po::value (&flags.output), "dataset directory to write")
     ("force", po::bool_switch (&flags.force), "replace an existing output directory")
@@ -55,8 +96,31 @@ parseSynthFlags (int argc, char **argv, SynthFlags &flags)
      "camera to body (each person's), metres")
     ("max-distance", po::value (&options.max_distance)->default_value (options.max_distance, "3.5; 6 with --people 2-4"),
      "camera to body (each person's), metres")
-    ("min-height", po::value (&options.min_height)->default_value (options.min_height, "0.8"), "camera above the floor, metres")
-    ("max-height", po::value (&options.max_height)->default_value (options.max_height, "1.6"), "camera above the floor, metres")
+    ("min-height", po::value (&options.min_height)->default_value (options.min_height, "0.8; 0.6 with --layout whole"),
+     "camera above the floor, metres")
+    ("max-height", po::value (&options.max_height)->default_value (options.max_height, "1.6; 2.5 with --layout whole"),
+     "camera above the floor, metres")
+    ("layout", po::value (&flags.layout)->default_value (flags.layout),
+     "aimed: the camera aimed at the people, level; whole: a camera of its own height, pitch and roll and 1 to "
+     "--people people anywhere in its view (some cut by the borders, some close-range upper bodies without a room, "
+     "some with the background removed)")
+    ("min-pitch", po::value (&options.min_pitch_deg)->default_value (options.min_pitch_deg),
+     "whole scenes: camera pitch, degrees, up positive")
+    ("max-pitch", po::value (&options.max_pitch_deg)->default_value (options.max_pitch_deg), "whole scenes: camera pitch")
+    ("max-roll", po::value (&options.max_roll_deg)->default_value (options.max_roll_deg),
+     "whole scenes: camera roll within +-this, degrees")
+    ("close-range-share", po::value (&options.close_range_share)->default_value (options.close_range_share),
+     "whole scenes: share of frames showing one upper body at 0.7-1.6 m without a room")
+    ("background-removed-share",
+     po::value (&options.background_removed_share)->default_value (options.background_removed_share),
+     "whole scenes: share of the other frames with every pixel off the people invalid")
+    ("border-share", po::value (&options.border_share)->default_value (options.border_share),
+     "whole scenes: how far beyond the image's edges a torso may stand, as a share of its width and height")
+    ("resolution", po::value (&flags.resolution),
+     "frame size WxH with the sensor's field of view, e.g. 320x240 for a kinect frame at half resolution")
+    ("clutter", po::value (&options.clutter)->default_value (options.clutter), "desks, chairs, shelves and boxes (1 or 0)")
+    ("config", po::value (&flags.config),
+     "a file of flag = value lines (the flags above without their dashes); flags on the command line win")
     ("body-mesh", po::value (&options.body_mesh),
      "MakeHuman directory (base.obj, default.mhskel, default_weights.mhw, e.g. ../shared/data/makehuman): skinned mesh "
      "bodies instead of capsules")
@@ -67,8 +131,18 @@ parseSynthFlags (int argc, char **argv, SynthFlags &flags)
      "also paint each frame in colour (random clothes, room and light; sr4000 and kinect): XYZRGBA frames for "
      "agex_annotate rgbd; the depth stays the same");
 
-  if (!parseCommandLine (argc, argv, general, po::positional_options_description ()))
+  // The command line first, so that its flags win over the config file's.
+  po::variables_map given;
+  const int style = po::command_line_style::default_style & ~po::command_line_style::allow_guessing;
+  po::store (po::command_line_parser (argc, argv).options (general).style (style).run (), given);
+  if (given.count ("help"))
+  {
+    std::cout << general << "\n";
     return false;
+  }
+  if (given.count ("config"))
+    po::store (parseSynthConfigFile (given["config"].as<std::string> (), general), given);
+  po::notify (given);
   if (options.motion_files.empty ())
     throw std::runtime_error ("no --motion BVH files given (see --help)");
   if (flags.frames < 1)
@@ -78,8 +152,27 @@ parseSynthFlags (int argc, char **argv, SynthFlags &flags)
   if (options.people < 1 || options.people > 4)
     throw std::runtime_error ("--people must be 1-4, got " + std::to_string (options.people));
   if (!parseSynthSensor (flags.sensor, options.sensor))
-    throw std::runtime_error ("unknown --sensor '" + flags.sensor + "' (expected sr4000, kinect or bonn)");
+    throw std::runtime_error ("unknown --sensor '" + flags.sensor + "' (expected " + synthSensorNames () + ")");
   options.bvh_scale = parseBvhScale (flags.bvh_scale);
+  if (!parseSynthLayout (flags.layout, options.layout))
+    throw std::runtime_error ("unknown --layout '" + flags.layout + "' (expected aimed or whole)");
+  if (!flags.resolution.empty ())
+    parseResolution (flags.resolution, options.width, options.height);
+  auto share = [] (double value, const char *flag, double most) {
+    if (!(value >= 0.0 && value <= most))
+      throw std::runtime_error (std::string ("--") + flag + " must be 0-" + (most == 1.0 ? "1" : "0.5") + ", got " +
+                                std::to_string (value));
+  };
+  share (options.close_range_share, "close-range-share", 1.0);
+  share (options.background_removed_share, "background-removed-share", 1.0);
+  share (options.border_share, "border-share", 0.5);
+  if (!(options.min_pitch_deg >= -89.0 && options.max_pitch_deg <= 89.0 && options.min_pitch_deg <= options.max_pitch_deg))
+    throw std::runtime_error ("--min-pitch and --max-pitch must satisfy -89 <= min <= max <= 89 degrees");
+  if (!(options.max_roll_deg >= 0.0 && options.max_roll_deg <= 90.0))
+    throw std::runtime_error ("--max-roll must be 0-90 degrees");
+  if (!(options.min_distance >= 0.0 && options.max_distance <= 20.0 && options.min_height >= 0.0 &&
+        options.max_height <= 10.0))
+    throw std::runtime_error ("--min/max-distance must lie in 0-20 m and --min/max-height in 0-10 m");
   return true;
 }
 }  // namespace apps

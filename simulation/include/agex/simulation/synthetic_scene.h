@@ -3,13 +3,16 @@
 // partly hiding each other) posed by real motion capture (BVH), a body made of capsules
 // and ellipsoids on the skeleton or the MakeHuman mesh, a room
 // (floor, back wall, optional side wall, clutter boxes or a desk), a randomly
-// placed camera, a ray-casting renderer and two sensor models:
-//   sr4000  144x176 portrait time-of-flight: 3x3 supersampling whose samples are
-//           blended as the sensor blends returns (mixed pixels at silhouettes),
-//           range noise growing as the returned amplitude falls (~depth^2)
-//   kinect  640x480 structured light: disparity quantisation and noise (depth
-//           steps grow with depth^2), projector shadows and holes at depth edges,
-//           no mixed pixels
+// placed camera, a ray-casting renderer (renderer.h) and sensor models (sensor_model.h,
+// one class each: depth_sensor.h):
+//   sr4000   144x176 portrait time-of-flight: 3x3 supersampling whose samples are
+//            blended as the sensor blends returns (mixed pixels at silhouettes),
+//            range noise growing as the returned amplitude falls (~depth^2)
+//   kinect2  512x424 time of flight (Kinect v2-like), the same kind of model
+//   kinect   640x480 structured light: disparity quantisation and noise (depth
+//            steps grow with depth^2), projector shadows, the correlation window
+//            (thin limbs thin out, silhouettes round off) and holes at depth edges
+//   bonn     a kinect frame in the Bonn frames' 8-bit depth and 144x176 portrait view
 // head / hand / foot tip labels (agex::PartLabel) with a depth-test visibility, and an
 // exact per-pixel part label (agex::SynthPart) of the surface each depth pixel shows.
 //
@@ -20,6 +23,9 @@
 
 #include <agex/simulation/body_shape.h>
 #include <agex/simulation/bvh.h>
+#include <agex/simulation/scene_primitives.h>
+#include <agex/simulation/sensor_model.h>
+#include <agex/simulation/synth_rng.h>
 #include <agex/io/dataset.h>
 #include <agex/io/frame_io.h>
 #include <agex/simulation/synth_mesh.h>
@@ -41,167 +47,7 @@
 
 namespace agex
 {
-/** Deterministic random numbers: std::mt19937_64 (fully specified by the standard)
-  * with uniform and Box-Muller normal variates computed here, never through the
-  * implementation-defined std:: distributions. */
-class SynthRng
-{
-public:
-  explicit SynthRng (std::uint64_t seed) : engine_ (seed) {}
-  /** A generator for item `index` of a run seeded with `seed` (SplitMix64 of both). */
-  static SynthRng forItem (std::uint64_t seed, std::uint64_t index);
-
-  std::uint64_t raw () { return engine_ (); }
-  /** Uniform in [0, 1), 53 random bits. */
-  double uniform ();
-  double uniform (double lo, double hi) { return lo + (hi - lo) * uniform (); }
-  /** Uniform integer in [0, n). */
-  int index (int n);
-  /** Standard normal (Box-Muller, both values of a pair are used). */
-  double normal ();
-  double normal (double mean, double sigma) { return mean + sigma * normal (); }
-  bool chance (double p) { return uniform () < p; }
-
-private:
-  std::mt19937_64 engine_;
-  bool have_spare_ = false;
-  double spare_ = 0.0;
-};
-
 // ---------------------------------------------------------------------------
-// Sensors
-
-enum class SynthSensor
-{
-  Sr4000,
-  Kinect,
-  Bonn  ///< the Bonn frames' look: kinect, 8-bit depth in 1.6 cm steps, their 144x176 portrait view
-};
-
-/** "sr4000", "kinect" or "bonn". */
-const char *synthSensorName (SynthSensor sensor);
-/** Inverse of synthSensorName; false for an unknown name. */
-bool parseSynthSensor (const std::string &name, SynthSensor &sensor);
-
-/** The image a sensor model produces and its noise parameters (doc/synthetic.md). The
-  * bonn model's image is the 144x176 portrait view (bonnPortraitView) of a kinect
-  * frame; it is rendered with renderSensorModel(Bonn), the kinect model. */
-struct SensorModel
-{
-  SynthSensor sensor = SynthSensor::Sr4000;
-  int width = 144, height = 176;
-  CameraIntrinsics intrinsics;
-  int supersample = 3;           ///< samples per pixel side (sr4000: 3x3, blended)
-  double min_range = 0.1, max_range = 5.0;  ///< metres; outside -> NaN
-  // sr4000 (time of flight): sigma = tof_sigma0 + tof_sigma_k / amplitude, with
-  // amplitude = reflectivity * cos(incidence) / range^2 averaged over the samples.
-  double tof_sigma0 = 0.001, tof_sigma_k = 0.0008, tof_sigma_max = 0.05;
-  double tof_min_amplitude = 0.008;  ///< below: NaN (the sensor's confidence cut)
-  // kinect (structured light): disparity in 1/8 px, q = 8 * f_ir * b / z, with
-  // noise sigma_q, rounded; z = 8 f_ir b / q. Projector at +b along x.
-  double kinect_f_ir = 580.0, kinect_baseline = 0.075, kinect_sigma_q = 0.5;
-  double kinect_min_cos = 0.12;       ///< incidence flatter than this: NaN
-  double kinect_edge_drop = 0.6;      ///< NaN chance of a pixel at a depth edge
-  double kinect_edge_drop_near = 0.2; ///< ... of a pixel beside one
-};
-
-/** The model of a sensor with its default parameters: the frames it writes. */
-SensorModel sensorModel (SynthSensor sensor);
-/** The model a sensor's frames are rendered with (kinect for bonn, else sensorModel). */
-SensorModel renderSensorModel (SynthSensor sensor);
-
-/** Depth step of the Bonn frames: 8-bit grey levels of 0.016 m (../shared/README.md). */
-constexpr double kBonnDepthStep = 0.016;
-
-// ---------------------------------------------------------------------------
-// Scene primitives
-
-/** What a primitive (and a rendered pixel) belongs to. */
-enum class SynthObject : std::uint8_t
-{
-  None = 0,
-  Floor = 1,
-  Wall = 2,
-  Clutter = 3,
-  Person = 4
-};
-
-/** What a body surface is dressed in, for colour frames (SynthOptions::colour); the
-  * room's surfaces take their colour from their SynthObject. */
-enum class SynthMaterial : std::uint8_t
-{
-  Default = 0,
-  Skin = 1,    ///< head, neck, hands
-  Top = 2,     ///< torso and arms
-  Bottom = 3,  ///< legs
-  Shoes = 4
-};
-
-struct SynthPrimitive
-{
-  enum class Shape
-  {
-    Capsule,    ///< segment a-b, radius
-    Ellipsoid,  ///< centre, axes (columns: orthogonal semi-axis vectors)
-    Box,        ///< centre, axes (columns: orthogonal half-extent vectors)
-    Plane,      ///< normal . x = offset (infinite)
-    Mesh        ///< triangles of `mesh`, placed by the rotation `axes` and the translation `centre`
-  };
-  Shape shape = Shape::Capsule;
-  SynthObject object = SynthObject::None;
-  float reflectivity = 0.7f;  ///< 0..1, for the time-of-flight amplitude
-  SynthMaterial material = SynthMaterial::Default;
-  /** The body part a Person primitive is, for the per-pixel part labels (None: the
-    * label is SynthPart::Unknown, "body, part unknown"). */
-  SynthPart part = SynthPart::None;
-  /** Meshes: the part of each triangle (parallel to mesh->triangles ()), overriding
-    * `part`; null for one part per primitive. */
-  std::shared_ptr<const std::vector<SynthPart>> triangle_parts;
-  /** Which person (1, 2, ...) a Person primitive belongs to, for the person labels. */
-  std::uint8_t person = 1;
-  Eigen::Vector3d a = Eigen::Vector3d::Zero (), b = Eigen::Vector3d::Zero ();
-  double radius = 0.0;
-  Eigen::Vector3d centre = Eigen::Vector3d::Zero ();
-  Eigen::Matrix3d axes = Eigen::Matrix3d::Identity ();
-  Eigen::Matrix3d inverse = Eigen::Matrix3d::Identity ();  ///< axes^-1 (kept by the factories)
-  Eigen::Vector3d normal = Eigen::Vector3d::UnitY ();
-  double offset = 0.0;
-  std::shared_ptr<const SynthMesh> mesh;
-
-  static SynthPrimitive capsule (const Eigen::Vector3d &a, const Eigen::Vector3d &b, double radius, SynthObject object);
-  static SynthPrimitive ellipsoid (const Eigen::Vector3d &centre, const Eigen::Matrix3d &axes, SynthObject object);
-  static SynthPrimitive box (const Eigen::Vector3d &centre, const Eigen::Matrix3d &axes, SynthObject object);
-  static SynthPrimitive plane (const Eigen::Vector3d &normal, double offset, SynthObject object);
-  /** A triangle mesh in the scene's frame (identity placement). */
-  static SynthPrimitive triangleMesh (std::shared_ptr<const SynthMesh> mesh, SynthObject object);
-
-  /** The same primitive after a rigid transform. */
-  SynthPrimitive transformed (const Eigen::Isometry3d &transform) const;
-  /** Bounding sphere; false for a plane (unbounded). */
-  bool boundingSphere (Eigen::Vector3d &centre, double &radius) const;
-  /** \brief Nearest ray hit at t > t_min along origin + t * direction (direction of
-    * unit length); sets the outward unit normal and, for meshes, the triangle hit (-1
-    * for other shapes). Returns -1 if none. */
-  double intersect (const Eigen::Vector3d &origin, const Eigen::Vector3d &direction, double t_min,
-                    Eigen::Vector3d *normal, int *triangle = nullptr) const;
-  /** The part label of a hit on this primitive (triangle from intersect): the
-    * triangle's part for meshes with triangle_parts, else `part`; Unknown for a Person
-    * primitive without one, None for the room. */
-  SynthPart partAt (int triangle) const;
-  /** Approximate signed distance of p to the surface (exact for capsules, boxes and
-    * planes, first order for ellipsoids); negative inside. Meshes give the unsigned
-    * distance. */
-  double distance (const Eigen::Vector3d &p) const;
-};
-
-/** A scene in one coordinate frame. */
-struct SynthScene
-{
-  std::vector<SynthPrimitive> primitives;
-  SynthScene transformed (const Eigen::Isometry3d &transform) const;
-  /** Smallest signed distance of p to the primitives of one object class (+inf if none). */
-  double distance (const Eigen::Vector3d &p, SynthObject object) const;
-};
 
 // ---------------------------------------------------------------------------
 // Bodies
@@ -390,6 +236,24 @@ void appendPersonLabels (const BodyModel &body_in_camera, const SensorModel &sen
 /** Half size of the label visibility window: 1 (3x3) for sr4000, 2 (5x5) for kinect. */
 int labelWindow (const SensorModel &sensor);
 
+/** How a frame's camera and people are laid out (doc/synthetic.md, "Whole scenes"). */
+enum class SynthLayout
+{
+  /** The camera aimed at the people (one: around them at any azimuth; several: in front),
+    * level within a few degrees: the frames of the earlier datasets. */
+  Aimed,
+  /** A camera of its own pose (height, pitch, roll drawn from their ranges) and 1 to
+    * `people` people anywhere in its view, some cut by the frame's borders; a share of the
+    * frames a close-range upper body without a room, and a share with the background
+    * removed: what a robot's or a ceiling camera sees. */
+  Whole
+};
+
+/** "aimed" or "whole". */
+const char *synthLayoutName (SynthLayout layout);
+/** Inverse of synthLayoutName; false for an unknown name. */
+bool parseSynthLayout (const std::string &name, SynthLayout &layout);
+
 /** Options of a synthetic run. */
 struct SynthOptions
 {
@@ -404,7 +268,24 @@ struct SynthOptions
   int people = 1;
   /** Camera to body (each person's), metres; 0: 1.5-3.5 for one person, 0.8-6 for several. */
   double min_distance = 0.0, max_distance = 0.0;
-  double min_height = 0.8, max_height = 1.6;      ///< camera above the floor, metres
+  /** Camera above the floor, metres; 0: 0.8-1.6 for aimed layouts, 0.6-2.5 for whole scenes. */
+  double min_height = 0.0, max_height = 0.0;
+  SynthLayout layout = SynthLayout::Aimed;
+  // Whole scenes only (layout Whole):
+  double min_pitch_deg = -35.0, max_pitch_deg = 10.0;  ///< camera pitch, degrees, up positive
+  double max_roll_deg = 10.0;                          ///< camera roll within +-this, degrees
+  /** Share of frames showing one person's upper body at 0.7-1.6 m, no room (the
+    * background already removed), as a robot's camera at arm's length sees them. */
+  double close_range_share = 0.15;
+  /** Share of the other frames whose pixels off every person are made invalid, as when a
+    * user removed the background before detection. */
+  double background_removed_share = 0.2;
+  /** How far beyond the image's edges a person's torso may stand, as a share of the image's
+    * width and height (people cut by the borders). */
+  double border_share = 0.15;
+  /** Frame size; 0: the sensor's own. Another size keeps the sensor's field of view (the
+    * intrinsics scale with it), so 320x240 is a Kinect frame at half resolution. */
+  int width = 0, height = 0;
   /** A MakeHuman directory (base.obj, default.mhskel, default_weights.mhw) for mesh
     * bodies (buildMeshBody); empty: capsule and ellipsoid bodies (buildBody). */
   std::string body_mesh;
@@ -461,6 +342,15 @@ private:
                           const std::vector<BodyModel> *bodies) const;
   /** Also returns each person's body (as body () gives it), in the placements' order. */
   std::vector<SynthPersonPlacement> drawPeople (std::uint64_t index, std::vector<BodyModel> &bodies) const;
+  /** A whole scene (SynthLayout::Whole): the camera's pose drawn first, then the people in
+    * its view. */
+  SynthFrame renderWhole (std::uint64_t index) const;
+  /** Renders people placed on the floor plan, seen by a camera of the given pose (null:
+    * aimed at them as render () aims for several people); room: the floor, walls and
+    * clutter (false: only the people). */
+  SynthFrame renderPlaced (SynthRng &rng, std::uint64_t index, const std::vector<SynthPersonPlacement> &people,
+                           const std::vector<BodyModel> *bodies, const Eigen::Isometry3d *world_to_camera,
+                           bool room) const;
   /** Horizontal field of view of the stored frames, radians. */
   double horizontalFieldOfView () const;
 

@@ -15,6 +15,9 @@ struct SynthFlags
   SynthOptions options;  ///< --bvh-scale and --sensor parsed into it
   std::string sensor = "sr4000";
   std::string bvh_scale = "auto";
+  std::string layout = "aimed";
+  std::string resolution;  ///< WxH, empty: the sensor's own
+  std::string config;      ///< a file of flag = value lines
   std::string output;
   int frames = 0;
   bool force = false;

@@ -1,4 +1,5 @@
 #include <agex/simulation/human_mesh.h>
+#include <agex/simulation/make_human_targets.h>
 
 #include <nlohmann/json.hpp>
 
@@ -149,7 +150,7 @@ boneIndex (const std::vector<HumanMesh::Bone> &bones, const std::string &name)
 /** A joint's position: the mean of its helper vertices, listed under "joints". */
 Eigen::Vector3d
 jointPosition (const nlohmann::json &joints, const std::string &bone, const nlohmann::json &joint_name,
-               const Obj &obj, const AssetPaths &paths)
+               const Obj &obj, const AssetPaths &paths, std::vector<int> &vertices)
 {
   const std::string name = joint_name.get<std::string> ();
   if (!joints.contains (name) || !joints.at (name).is_array ())
@@ -164,6 +165,7 @@ jointPosition (const nlohmann::json &joints, const std::string &bone, const nloh
       throw HumanMeshError (paths.skeleton.string () + ": joint '" + name + "' names vertex " + i.dump () + ", but " +
                             paths.obj.string () + " has " + std::to_string (obj.vertices.size ()));
     sum += obj.vertices[static_cast<std::size_t> (v)];
+    vertices.push_back (static_cast<int> (v));
   }
   if (indices.empty ())
     throw HumanMeshError (paths.skeleton.string () + ": joint '" + name + "' has no vertices");
@@ -173,7 +175,8 @@ jointPosition (const nlohmann::json &joints, const std::string &bone, const nloh
 /** The skeleton's bones, parents first: repeatedly take the bones whose parent is
   * placed (names sorted, so the order does not depend on the file's). */
 std::vector<HumanMesh::Bone>
-readBones (const nlohmann::json &skeleton, const Obj &obj, const AssetPaths &paths)
+readBones (const nlohmann::json &skeleton, const Obj &obj, const AssetPaths &paths,
+           std::vector<std::vector<int>> &joint_vertices)
 {
   std::vector<HumanMesh::Bone> bones;
   try
@@ -207,8 +210,10 @@ readBones (const nlohmann::json &skeleton, const Obj &obj, const AssetPaths &pat
         HumanMesh::Bone bone;
         bone.name = it->first;
         bone.parent = parent_index;
-        bone.head = jointPosition (joints, bone.name, b.at ("head"), obj, paths);
-        bone.tail = jointPosition (joints, bone.name, b.at ("tail"), obj, paths);
+        joint_vertices.emplace_back ();
+        bone.head = jointPosition (joints, bone.name, b.at ("head"), obj, paths, joint_vertices.back ());
+        joint_vertices.emplace_back ();
+        bone.tail = jointPosition (joints, bone.name, b.at ("tail"), obj, paths, joint_vertices.back ());
         placed.emplace (bone.name, static_cast<int> (bones.size ()));
         bones.push_back (std::move (bone));
         it = pending.erase (it);
@@ -536,26 +541,82 @@ HumanMesh::bone (const std::string &name) const
   return boneIndex (bones_, name);
 }
 
+namespace
+{
+AssetPaths
+assetPaths (const std::string &directory)
+{
+  const std::filesystem::path dir (directory);
+  return AssetPaths{dir / "base.obj", dir / "default.mhskel", dir / "default_weights.mhw"};
+}
+}  // namespace
+
 HumanMesh
 HumanMesh::load (const std::string &directory)
 {
-  const std::filesystem::path dir (directory);
-  const AssetPaths paths{dir / "base.obj", dir / "default.mhskel", dir / "default_weights.mhw"};
+  const AssetPaths paths = assetPaths (directory);
   const Obj obj = readObj (paths.obj);
   const nlohmann::json skeleton = readJson (paths.skeleton), weights = readJson (paths.weights);
 
   HumanMesh mesh;
-  mesh.bones_ = readBones (skeleton, obj, paths);
+  mesh.directory_ = directory;
+  mesh.bones_ = readBones (skeleton, obj, paths, mesh.joint_vertices_);
   requireBones (mesh.bones_, paths);
   BodyGroup body = bodyGroup (obj);
   mesh.influences_ = readInfluences (weights, mesh.bones_, body, paths);
   normaliseInfluences (mesh.influences_, body, paths);
   mesh.vertices_ = std::move (body.vertices);
+  mesh.base_vertices_ = obj.vertices;
+  mesh.body_vertex_source_.reserve (body.obj_number.size ());
+  for (const long number : body.obj_number)
+    mesh.body_vertex_source_.push_back (static_cast<int> (number - 1));
   mesh.triangles_ = std::move (body.triangles);
   mesh.parts_ = vertexParts (mesh.influences_, boneParts (mesh.bones_));
   mesh.triangle_parts_ = partsOfTriangles (mesh.triangles_, mesh.parts_);
   mesh.bone_labels_ = labelBones (mesh.bones_);
   mesh.triangle_labels_ = labelTriangles (mesh.triangles_, mesh.influences_, mesh.bone_labels_);
+  mesh.tips_ = findTipVertices (mesh.vertices_, mesh.parts_, mesh.bones_, paths);
+  mesh.height_ = standingHeight (mesh.vertices_, paths);
+  return mesh;
+}
+
+HumanMesh
+HumanMesh::load (const std::string &directory, const BodyShape &shape)
+{
+  const HumanMesh base = load (directory);
+  return base.shaped (MakeHumanTargets::load (directory, base.baseVertexCount ()), shape);
+}
+
+HumanMesh
+HumanMesh::shaped (const MakeHumanTargets &targets, const BodyShape &shape) const
+{
+  if (targets.vertexCount () != base_vertices_.size ())
+    throw HumanMeshError ("the MakeHuman targets are for a mesh of " + std::to_string (targets.vertexCount ()) +
+                          " vertices, " + directory_ + "/base.obj has " + std::to_string (base_vertices_.size ()));
+  const std::vector<Eigen::Vector3d> offsets = targets.offsets (shape);  // checks the shape
+  std::vector<Eigen::Vector3d> all (base_vertices_.size ());
+  for (std::size_t v = 0; v < all.size (); ++v)
+    all[v] = base_vertices_[v] + offsets[v];
+
+  HumanMesh mesh = *this;
+  mesh.shaped_ = true;
+  mesh.shape_ = shape;
+  for (std::size_t v = 0; v < mesh.vertices_.size (); ++v)
+    mesh.vertices_[v] = all[static_cast<std::size_t> (body_vertex_source_[v])];
+  // The skeleton follows the shaped mesh: each joint is the mean of its helper vertices,
+  // summed in the order the skeleton file lists them (as load does).
+  auto mean = [&] (const std::vector<int> &indices) {
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero ();
+    for (const int i : indices)
+      sum += all[static_cast<std::size_t> (i)];
+    return Eigen::Vector3d (sum / static_cast<double> (indices.size ()));
+  };
+  for (std::size_t b = 0; b < mesh.bones_.size (); ++b)
+  {
+    mesh.bones_[b].head = mean (joint_vertices_[2 * b]);
+    mesh.bones_[b].tail = mean (joint_vertices_[2 * b + 1]);
+  }
+  const AssetPaths paths = assetPaths (directory_);
   mesh.tips_ = findTipVertices (mesh.vertices_, mesh.parts_, mesh.bones_, paths);
   mesh.height_ = standingHeight (mesh.vertices_, paths);
   return mesh;

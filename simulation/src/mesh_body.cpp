@@ -215,6 +215,23 @@ private:
   std::vector<Eigen::Vector3d> rest_head_, posed_head_;
 };
 
+/** The parameters a mesh is posed with. A shaped mesh (HumanMesh::shaped) has its
+  * MakeHuman stature and girth: the sizes of BodyParams are ignored (reflectivity is
+  * kept) and the clip's motion is scaled to the mesh's height (height_scale = mesh
+  * height / the clip's rest height), so the body is posed at its true size and the
+  * root travels in proportion to it. An unshaped mesh is scaled to the clip's rest
+  * height times height_scale and widened by the girth parameters, as before. */
+BodyParams
+meshParams (const MotionClip &clip, const BodyParams &params, const HumanMesh &mesh)
+{
+  if (!mesh.isShaped ())
+    return params;
+  BodyParams shaped;
+  shaped.reflectivity = params.reflectivity;
+  shaped.height_scale = mesh.height () / restStandingHeight (clip);
+  return shaped;
+}
+
 SynthMaterial
 partMaterial (HumanMesh::Part part)
 {
@@ -237,8 +254,9 @@ partMaterial (HumanMesh::Part part)
 }  // namespace
 
 BodyModel
-buildMeshBody (const MotionClip &clip, int frame, const BodyParams &params, const HumanMesh &mesh)
+buildMeshBody (const MotionClip &clip, int frame, const BodyParams &given, const HumanMesh &mesh)
 {
+  const BodyParams params = meshParams (clip, given, mesh);
   const MeshPose pose (clip, frame, params, mesh);
   const std::size_t n = mesh.vertices ().size ();
   std::vector<Eigen::Vector3d> posed (n);
@@ -311,12 +329,14 @@ buildMeshBody (const MotionClip &clip, int frame, const BodyParams &params, cons
 std::vector<Eigen::Vector3d>
 meshBoneHeads (const MotionClip &clip, int frame, const BodyParams &params, const HumanMesh &mesh)
 {
-  return MeshPose (clip, frame, params, mesh).posedHeads ();
+  const BodyParams posed_with = meshParams (clip, params, mesh);
+  return MeshPose (clip, frame, posed_with, mesh).posedHeads ();
 }
 
 double
-meshBodyLowest (const MotionClip &clip, int frame, const BodyParams &params, const HumanMesh &mesh)
+meshBodyLowest (const MotionClip &clip, int frame, const BodyParams &given, const HumanMesh &mesh)
 {
+  const BodyParams params = meshParams (clip, given, mesh);
   const MeshPose pose (clip, frame, params, mesh);
   double lowest = std::numeric_limits<double>::infinity ();
   for (std::size_t v = 0; v < mesh.vertices ().size (); ++v)

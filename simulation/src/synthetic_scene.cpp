@@ -4,6 +4,7 @@
 #include <agex/simulation/bonn_sensor.h>
 #include <agex/simulation/camera_pose.h>
 #include <agex/simulation/human_mesh.h>
+#include <agex/simulation/make_human_targets.h>
 #include <agex/simulation/renderer.h>
 #include <agex/simulation/room.h>
 
@@ -625,25 +626,48 @@ SynthGenerator::SynthGenerator (const SynthOptions &options_in)
   SynthRng rng = SynthRng::forItem (options.seed, ~0ull);
   for (int s = 0; s < options.subjects; ++s)
     subjects_.push_back (BodyParams::random (rng));
+  if (options.body_shapes && options.body_mesh.empty ())
+    throw std::invalid_argument ("body shapes need a MakeHuman body mesh (body_mesh)");
   if (!options.body_mesh.empty ())
     mesh_ = std::make_shared<const HumanMesh> (HumanMesh::load (options.body_mesh));
+  if (options.body_shapes)
+  {
+    // Shapes from their own generator, so the subjects' BodyParams stay as without.
+    SynthRng shape_rng = SynthRng::forItem (options.seed, ~1ull);
+    const MakeHumanTargets targets = MakeHumanTargets::load (options.body_mesh, mesh_->baseVertexCount ());
+    for (int s = 0; s < options.subjects; ++s)
+    {
+      shapes_.push_back (BodyShape::sample (shape_rng));
+      shaped_.push_back (std::make_shared<const HumanMesh> (mesh_->shaped (targets, shapes_.back ())));
+    }
+  }
   // The floor of a clip for a subject: the lowest the body gets over the whole clip; the
   // bank stands every pose on y = 0 itself.
   floor_.resize (clips_.size ());
   for (std::size_t c = 0; c < clips_.size (); ++c)
-    for (const auto &params : subjects_)
+    for (std::size_t s = 0; s < subjects_.size (); ++s)
     {
       if (pose_bank)
       {
         floor_[c].push_back (0.0);
         continue;
       }
+      const BodyParams &params = subjects_[s];
+      const HumanMesh *mesh = this->mesh (static_cast<int> (s));
       double lowest = kInf;
       for (int f = 0; f < clips_[c].motion.frameCount (); ++f)
-        lowest = std::min (lowest, mesh_ ? meshBodyLowest (clips_[c], f, params, *mesh_)
-                                         : buildBody (clips_[c], f, params).lowest);
+        lowest = std::min (lowest, mesh ? meshBodyLowest (clips_[c], f, params, *mesh)
+                                        : buildBody (clips_[c], f, params).lowest);
       floor_[c].push_back (lowest);
     }
+}
+
+const HumanMesh *
+SynthGenerator::mesh (int subject) const
+{
+  if (subject < 0 || subject >= static_cast<int> (subjects_.size ()))
+    throw std::out_of_range ("subject " + std::to_string (subject) + " of " + std::to_string (subjects_.size ()));
+  return shaped_.empty () ? mesh_.get () : shaped_[static_cast<std::size_t> (subject)].get ();
 }
 
 BodyModel
@@ -651,7 +675,8 @@ SynthGenerator::body (int clip, int clip_frame, int subject) const
 {
   const MotionClip &c = clips_.at (static_cast<std::size_t> (clip));
   const BodyParams &params = subjects_.at (static_cast<std::size_t> (subject));
-  return mesh_ ? buildMeshBody (c, clip_frame, params, *mesh_) : buildBody (c, clip_frame, params);
+  const HumanMesh *mesh = this->mesh (subject);
+  return mesh ? buildMeshBody (c, clip_frame, params, *mesh) : buildBody (c, clip_frame, params);
 }
 
 namespace
@@ -1150,7 +1175,9 @@ SynthGenerator::datasetInfo () const
     p << "; " << options_.people << " people per frame (doc/synthetic.md, \"Several people\")";
   p << "; subjects:";
   for (std::size_t s = 0; s < subjects_.size (); ++s)
-    p << " #" << s << " " << subjects_[s].describe () << (s + 1 < subjects_.size () ? ";" : "");
+    p << " #" << s << " " << subjects_[s].describe ()
+      << (s < shapes_.size () ? " shape " + shapes_[s].describe () + " (" + fixed (shaped_[s]->height ()) + " m)" : "")
+      << (s + 1 < subjects_.size () ? ";" : "");
   p << "; each frame draws (clip, clip frame, subject, camera, room, noise) from its own generator; see "
        "doc/synthetic.md";
   info.provenance = p.str ();

@@ -134,6 +134,9 @@ parseSynthFlags (int argc, char **argv, SynthFlags &flags)
      "keep only pose bank poses farther apart than this, metres 0-1 (largest joint distance; 0 keeps all)")
     ("pose-report", po::value (&flags.pose_report),
      "write a PNG of the pose bank's hand positions and print its sizes and spread; without --frames, only that")
+    ("body-shapes", po::bool_switch (&options.body_shapes),
+     "with --body-mesh: give each subject its own MakeHuman body shape (gender, age, muscle, weight, height; "
+     "targets/macrodetails of the --body-mesh directory), 1.5-2.0 m tall, slim to heavy")
     ("colour", po::bool_switch (&options.colour),
      "also paint each frame in colour (random clothes, room and light; sr4000 and kinect): XYZRGBA frames for "
      "agex_annotate rgbd; the depth stays the same");

@@ -3,6 +3,7 @@
 // default_weights.mhw) as a skinned body for synthetic frames: the `body` group of the
 // base mesh, its 163-bone skeleton and the skin weights, posed by a CMU motion capture
 // skeleton (doc/synthetic.md, "Mesh bodies").
+#include <agex/simulation/body_shape.h>
 #include <agex/simulation/synth_part.h>
 
 #include <Eigen/Core>
@@ -20,6 +21,8 @@ class HumanMeshError : public std::runtime_error
 public:
   using std::runtime_error::runtime_error;
 };
+
+class MakeHumanTargets;
 
 class HumanMesh
 {
@@ -55,6 +58,24 @@ public:
   /** \brief Reads base.obj, default.mhskel and default_weights.mhw from a directory.
     * \throws HumanMeshError naming the file and what is wrong with it */
   static HumanMesh load (const std::string &directory);
+  /** \brief The same body shaped by MakeHuman's macro targets of the directory (reads
+    * them each call; to shape many bodies, load once and call shaped).
+    * \throws HumanMeshError naming a bad file, or for an invalid shape */
+  static HumanMesh load (const std::string &directory, const BodyShape &shape);
+
+  /** \brief This body with a shape: the targets' blended offsets are added to every
+    * vertex of base.obj (unshaped, whatever this body's shape), then the `body` group's
+    * vertices, the skeleton (each joint the mean of its helper vertices), the tips and
+    * the height are recomputed. Faces, weights, parts and labels stay.
+    * \throws HumanMeshError for an invalid shape or targets of another mesh */
+  HumanMesh shaped (const MakeHumanTargets &targets, const BodyShape &shape) const;
+  /** Whether the body was shaped (shaped()); load (directory) gives base.obj as it is,
+    * which is not MakeHuman's default human (that one blends the ethnic targets too). */
+  bool isShaped () const { return shaped_; }
+  /** The shape given to shaped(); meaningless unless isShaped(). */
+  const BodyShape &shape () const { return shape_; }
+  /** Vertices of base.obj, all groups (targets index these). */
+  std::size_t baseVertexCount () const { return base_vertices_.size (); }
 
   /** Rest-pose vertices of the `body` group in metres: +X the body's left, +Y up, +Z
     * forward (MakeHuman's frame, decimetres in the file). */
@@ -94,5 +115,13 @@ private:
   std::vector<SynthPart> bone_labels_, triangle_labels_;
   std::array<int, kParts> tips_{};
   double height_ = 0.0;
+  // What shaped() needs: base.obj's vertices (metres, unshaped), each body vertex's
+  // index among them, and the helper vertices of each bone's head (2b) and tail (2b + 1).
+  std::string directory_;
+  std::vector<Eigen::Vector3d> base_vertices_;
+  std::vector<int> body_vertex_source_;
+  std::vector<std::vector<int>> joint_vertices_;
+  bool shaped_ = false;
+  BodyShape shape_;
 };
 }  // namespace agex

@@ -21,6 +21,7 @@
 // raw output, so the same seed gives the same bytes on every run and platform with
 // the same floating point.
 
+#include <agex/simulation/body_shape.h>
 #include <agex/simulation/bvh.h>
 #include <agex/simulation/scene_primitives.h>
 #include <agex/simulation/sensor_model.h>
@@ -127,7 +128,9 @@ class HumanMesh;
 
 /** \brief Poses the MakeHuman mesh body on frame `frame` of a clip (-1 = rest pose):
   * the mesh is scaled to the clip's rest height times params.height_scale, shaped by
-  * the other params, and each bone follows the motion capture segment it lies on
+  * the other params (a shaped mesh, HumanMesh::isShaped, keeps its own size and girth
+  * instead: only params.reflectivity is used, and the clip's motion is scaled to the
+  * mesh's height; doc/synthetic.md, "Body shapes"), and each bone follows the motion capture segment it lies on
   * (rotation of the segment's joint, then turned so the bone points where the segment
   * does; doc/synthetic.md). One mesh primitive per HumanMesh::Part, in its order
   * (trunk, head, hands, feet, arms, legs); tips are mesh vertices (top of the head, middle finger tips,
@@ -286,6 +289,10 @@ struct SynthOptions
   /** A MakeHuman directory (base.obj, default.mhskel, default_weights.mhw) for mesh
     * bodies (buildMeshBody); empty: capsule and ellipsoid bodies (buildBody). */
   std::string body_mesh;
+  /** With body_mesh: each subject gets its own BodyShape (BodyShape::sample, drawn from
+    * the seed) and the mesh shaped by MakeHuman's macro targets of body_mesh, so its
+    * stature and girth come from the shape (doc/synthetic.md, "Body shapes"). */
+  bool body_shapes = false;
   /** Also paint colour frames (shadeColour; sr4000 and kinect only); the depth is the same
     * as without. */
   bool colour = false;
@@ -313,8 +320,13 @@ public:
   const std::vector<MotionClip> &clips () const { return clips_; }
   const std::vector<BodyParams> &subjects () const { return subjects_; }
 
-  /** The mesh bodies are made of, null for capsule bodies. */
+  /** The mesh bodies are made of (unshaped), null for capsule bodies. */
   const HumanMesh *mesh () const { return mesh_.get (); }
+  /** The mesh of one subject: its shaped mesh with body_shapes, else mesh().
+    * \throws std::out_of_range for a subject out of range */
+  const HumanMesh *mesh (int subject) const;
+  /** Each subject's body shape; empty without body_shapes. */
+  const std::vector<BodyShape> &shapes () const { return shapes_; }
   /** The body a subject has on a clip frame: mesh or capsules, as the options say. */
   BodyModel body (int clip, int clip_frame, int subject) const;
 
@@ -354,6 +366,8 @@ private:
   std::vector<MotionClip> clips_;
   std::vector<BodyParams> subjects_;
   std::shared_ptr<const HumanMesh> mesh_;
+  std::vector<BodyShape> shapes_;                           ///< per subject, with body_shapes
+  std::vector<std::shared_ptr<const HumanMesh>> shaped_;  ///< per subject, with body_shapes
   std::vector<std::vector<double>> floor_;  ///< [clip][subject]: floor height, clip frame
 };
 

@@ -6,5 +6,6 @@ target_sources(agex_classification_lib PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/src/pcl_tree_reader.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/body_part_labeling.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/part_modes.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/part_blobs.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/body_part_forest_trainer.cpp)
 target_link_libraries(agex_classification_lib PRIVATE Boost::iostreams ${PCL_IO_LIBRARIES})

@@ -29,7 +29,21 @@ detectorOptionsDescription (DetectorChoice &choice, const std::string &model_def
        if (v < 0 || v > 8)
          throw std::runtime_error ("--forest-stride must lie in [0, 8]");
      }),
-     "forest: one evaluated pixel per stride x stride cell (0: by the focal length, 2 at 640x480)");
+     "forest: one evaluated pixel per stride x stride cell (0: by the focal length, 2 at 640x480)")
+    ("forest-input", po::value (&choice.forest_input)->default_value (choice.forest_input)->notifier ([] (const std::string &v) {
+       ForestInput input;
+       if (!parseForestInput (v, input))
+         throw std::runtime_error ("--forest-input must be automatic, persons or meshes, not '" + v + "'");
+     }),
+     "forest mode: the pixels the forest labels: persons (as segmented, at the frame's own depth), meshes (after "
+     "the cleaning stages, as before) or automatic (persons for PCL's forests, meshes for ours: what each was trained on)")
+    ("forest-parts", po::value (&choice.forest_parts)->default_value (choice.forest_parts)->notifier ([] (const std::string &v) {
+       PartProposals proposals;
+       if (!parsePartProposals (v, proposals))
+         throw std::runtime_error ("--forest-parts must be blobs or modes, not '" + v + "'");
+     }),
+     "forest mode: labels to parts: blobs (PCL-style connected blobs at their extremities) or modes (mean shift, "
+     "as before)");
   return desc;
 }
 
@@ -40,6 +54,7 @@ LoadedDetector::configure (BodyPartDetector<pcl::PointXYZ> &detector) const
   detector.setForest (forest);
   detector.setMode (mode);
   detector.setForestStride (forest_stride);
+  detector.setForestParts (forest_parts);
 }
 
 LoadedDetector
@@ -73,6 +88,10 @@ loadDetector (const DetectorChoice &choice, DetectorKind kind)
                                 " was trained with (" + loaded.model->settings ().forest_file + ")");
   }
   loaded.forest_stride = choice.forest_stride;
+  if (!parseForestInput (choice.forest_input, loaded.forest_parts.input))
+    throw std::runtime_error ("--forest-input must be automatic, persons or meshes, not '" + choice.forest_input + "'");
+  if (!parsePartProposals (choice.forest_parts, loaded.forest_parts.proposals))
+    throw std::runtime_error ("--forest-parts must be blobs or modes, not '" + choice.forest_parts + "'");
   loaded.mode_name = loaded.mode == DetectorMode::Forest ? "forest" : detectorKindName (model_kind);
   return loaded;
 }

@@ -272,6 +272,11 @@ evaluateDetection (const DatasetSelection &selection, const LoadedDetector &load
                           {"detector_mode", loaded.mode_name}};
   if (loaded.files.size () > 1)
     about["forest"] = loaded.files.back ();
+  if (loaded.mode == DetectorMode::Forest)
+  {
+    about["forest_input"] = forestInputName (loaded.forest_parts.input);
+    about["forest_parts"] = partProposalsName (loaded.forest_parts.proposals);
+  }
   const std::size_t frames = selection.frame_ids.size ();
   DetectionTally tally (radius);
   if (!group.distributed ())

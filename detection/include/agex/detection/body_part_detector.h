@@ -6,6 +6,7 @@
 #include <agex/detection/body_part_detection.h>
 #include <agex/detection/depth_pipeline.h>
 #include <agex/detection/detector_model.h>
+#include <agex/detection/forest_parts.h>
 #include <agex/detection/fused_candidates.h>
 
 #include <pcl/pcl_base.h>
@@ -96,6 +97,17 @@ public:
   void setForestStride (int stride) { forest_stride_ = stride; }
   int getForestStride () const { return forest_stride_; }
 
+  /** \brief How Forest mode labels and names parts (agex::ForestPartSettings; default: the
+    * persons as segmented, PCL-style blobs at their extremities). A fused model keeps its
+    * training's meshes and modes.
+    * \throws std::invalid_argument on a setting out of range */
+  void setForestParts (const ForestPartSettings &settings)
+  {
+    settings.validate ([] (const std::string &key) { return "ForestPartSettings::" + key; });
+    forest_parts_ = settings;
+  }
+  const ForestPartSettings &getForestParts () const { return forest_parts_; }
+
   /** \brief Runs the detector on the input cloud; detections sorted by confidence.
     * Without a model (or, in Forest mode, a forest), reports an error (PCL_ERROR) and gives
     * none. */
@@ -124,13 +136,15 @@ private:
   /** Names the AGEX points (or, windows, classifies the sliding windows) of the
     * intermediate result, appending the "patches" and "classify" timings. */
   void classify (std::vector<BodyPartDetection> &detections, bool windows);
-  /** Labels the meshes' pixels with the forest and finds the part modes ("forest" timing). */
+  /** Labels the person's pixels with the forest and finds the parts: Forest mode as
+    * forest_parts_ says, a fused model on its meshes with modes ("forest" timing). */
   bool labelParts ();
   /** One detection per part mode, suppressed and sorted ("modes" timing). */
   void detectFromModes (std::vector<BodyPartDetection> &detections);
   /** A fused model's candidates named by its classifier ("patches", "classify" timings). */
   void classifyFused (std::vector<BodyPartDetection> &detections);
-  /** Each detection's person (from its pixel's mesh); drops those of persons too far away. */
+  /** Each detection's person (from its pixel's mesh, else its pixel's person); drops those
+    * of persons too far away. */
   void assignPersons (std::vector<BodyPartDetection> &detections) const;
   /** Keeps the most confident detection of a class within the suppression radius, sorted. */
   void suppress (std::vector<BodyPartDetection> &candidates, std::vector<BodyPartDetection> &detections) const;
@@ -145,6 +159,8 @@ private:
   float fx_ = 0.f, fy_ = 0.f;
   float used_fx_ = 0.f;  ///< the focal length the last forest pass used
   int forest_stride_ = 1;
+  ForestPartSettings forest_parts_;
+  pcl::PointCloud<pcl::PointXYZ>::Ptr xyz_frame_;  ///< the input as XYZ, for other point types
   pcl::PointCloud<BodyPartLabelPoint> part_labels_;
   std::vector<PartMode> part_modes_;
   std::vector<FusedCandidate> candidates_;

@@ -21,9 +21,11 @@ struct DetectorChoice
   std::string forest;  ///< forest: our model file, a PCL tree file or a directory of them
   std::string mode;  ///< agex, fused or forest; empty: the model's own kind
   int forest_stride = 1;
+  std::string forest_input = "automatic";  ///< forest mode: automatic, persons or meshes (agex::ForestInput)
+  std::string forest_parts = "blobs";    ///< forest mode: blobs or modes (agex::PartProposals)
 };
 
-/** --model, --forest, --detector-mode, --forest-stride; model_default is --model's default. */
+/** --model, --forest, --detector-mode, --forest-stride, --forest-input, --forest-parts; model_default is --model's default. */
 boost::program_options::options_description detectorOptionsDescription (DetectorChoice &choice,
                                                                         const std::string &model_default);
 
@@ -34,10 +36,11 @@ struct LoadedDetector
   BodyPartForest::ConstPtr forest;
   DetectorMode mode = DetectorMode::Model;
   int forest_stride = 1;
+  ForestPartSettings forest_parts;
   /** What names the parts: "agex", "fused", "sliding_window" (the model's kind) or "forest". */
   std::string mode_name;
 
-  /** Gives detector the model, forest, mode and stride. */
+  /** Gives detector the model, forest, mode, stride and forest-mode settings. */
   void configure (BodyPartDetector<pcl::PointXYZ> &detector) const;
   /** The files it was loaded from (what no output may overwrite). */
   std::vector<std::string> files;

@@ -9,8 +9,11 @@
 #include <agex/detection/training_samples.h>
 #include <agex/features/depth_patch_estimation.h>
 
+#include <pcl/common/io.h>
+
 #include <algorithm>
 #include <chrono>
+#include <type_traits>
 
 template <typename PointT> typename agex::BodyPartDetector<PointT>::Ptr
 agex::BodyPartDetector<PointT>::fromModel (const std::string &path)
@@ -97,6 +100,16 @@ agex::BodyPartDetector<PointT>::assignPersons (std::vector<BodyPartDetection> &d
   for (std::size_t m = 0; m < r.meshes.size (); ++m)
     for (const auto i : r.meshes[m].indices)
       mesh_of[static_cast<std::size_t> (i)] = static_cast<int> (m);
+  // Forest mode may name a pixel the cleaning stages removed: its person is the segmented one.
+  std::vector<int> person_of;
+  if (mode_ == DetectorMode::Forest)
+  {
+    person_of.assign (r.filtered->size (), -1);
+    for (std::size_t p = 0; p < r.persons.size (); ++p)
+      for (const auto i : r.persons[p].indices)
+        if (i >= 0 && static_cast<std::size_t> (i) < person_of.size ())
+          person_of[static_cast<std::size_t> (i)] = static_cast<int> (p);
+  }
   const int width = static_cast<int> (r.filtered->width);
   std::vector<BodyPartDetection> kept;
   for (auto &d : detections)
@@ -107,6 +120,8 @@ agex::BodyPartDetector<PointT>::assignPersons (std::vector<BodyPartDetection> &d
       d.mesh = mesh_of[static_cast<std::size_t> (index)];
     if (d.mesh >= 0 && static_cast<std::size_t> (d.mesh) < r.mesh_person.size ())
       d.person = r.mesh_person[static_cast<std::size_t> (d.mesh)];
+    else if (d.mesh < 0 && inside && !person_of.empty ())
+      d.person = person_of[static_cast<std::size_t> (index)];
     // A person too far for its parts to have pixels enough gets no guesses (PersonInfo::too_far).
     if (d.person >= 0 && static_cast<std::size_t> (d.person) < r.person_info.size () &&
         r.person_info[static_cast<std::size_t> (d.person)].too_far)
@@ -130,7 +145,23 @@ agex::BodyPartDetector<PointT>::labelParts ()
   const int stride = mode_ == DetectorMode::Model && settings_.kind == DetectorKind::Fused ? settings_.forest_stride
                                                                                             : forest_stride_;
   std::pair<double, double> ms{0.0, 0.0};
-  const bool ok = labelPersonParts (prepared, forest_, fx, fy, stride, part_labels_, part_modes_, &ms);
+  bool ok = false;
+  if (mode_ == DetectorMode::Forest)
+  {
+    pcl::PointCloud<pcl::PointXYZ>::ConstPtr frame;
+    if constexpr (std::is_same<PointT, pcl::PointXYZ>::value)
+      frame = input_;
+    else if (input_)
+    {
+      if (!xyz_frame_)
+        xyz_frame_.reset (new pcl::PointCloud<pcl::PointXYZ>);
+      pcl::copyPointCloud (*input_, *xyz_frame_);
+      frame = xyz_frame_;
+    }
+    ok = forestParts (prepared, frame, forest_, fx, fy, stride, forest_parts_, part_labels_, part_modes_, &ms);
+  }
+  else
+    ok = labelPersonParts (prepared, forest_, fx, fy, stride, part_labels_, part_modes_, &ms);
   // The focal-length fit and the labelling are the forest's; the mean shift is the modes'.
   intermediate_.ms.emplace_back ("forest", ok ? msSince (start) - ms.second : msSince (start));
   intermediate_.ms.emplace_back ("part_modes", ms.second);

@@ -23,7 +23,7 @@ for view in portrait full; do
   [ -d "$WORK/bonn-$view" ] || "$BIN/agex_convert" bonn --input "$SHARED/bonn" --output "$WORK/bonn-$view" --view "$view" >/dev/null
   "$BIN/agex_eval" detect --dataset "$WORK/bonn-$view@$ALL" --keyframes --model "$MODEL" --detector-mode forest \
     --forest "$FOREST" --json "$OUT/detect_$view.json" > "$OUT/detect_$view.log" 2>&1
-  "$BIN/agex_eval" parts --dataset "$WORK/bonn-$view@$ALL" --keyframes --forest "$FOREST" \
+  "$BIN/agex_eval" parts --dataset "$WORK/bonn-$view@$ALL" --keyframes --model "$MODEL" --forest "$FOREST" \
     --json "$OUT/parts_$view.json" > "$OUT/parts_$view.log" 2>&1
 done
 # Part maps of real frames of other people and sensors.

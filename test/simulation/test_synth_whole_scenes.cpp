@@ -73,11 +73,17 @@ TEST (SynthWholeScenes, BadSettingsAreRefused)
   refused ([] (agex::SynthOptions &o) { o.width = 8, o.height = 6; });
   refused ([] (agex::SynthOptions &o) { o.sensor = agex::SynthSensor::Bonn; });  // 144x176 only
   refused ([] (agex::SynthOptions &o) { o.max_height = 50; });
+  refused ([] (agex::SynthOptions &o) { o.kinect_window = 4; });   // even
+  refused ([] (agex::SynthOptions &o) { o.kinect_window = 33; });
   agex::SynthLayout layout;
   EXPECT_FALSE (agex::parseSynthLayout ("room", layout));
   ASSERT_TRUE (agex::parseSynthLayout ("whole", layout));
   EXPECT_EQ (layout, agex::SynthLayout::Whole);
   // Defaults of whole scenes: cameras 0.6-2.5 m high, people 0.8-6 m away.
+  agex::SynthOptions windowed = wholeOptions ();
+  windowed.kinect_window = 9;
+  const agex::SynthGenerator with_window (windowed);
+  EXPECT_EQ (with_window.sensor ().kinect_window, 5) << "9 pixels at 640x480 are 5 at 320x240";
   const agex::SynthGenerator gen (wholeOptions ());
   EXPECT_EQ (gen.options ().min_height, 0.6);
   EXPECT_EQ (gen.options ().max_height, 2.5);

@@ -118,6 +118,9 @@ parseSynthFlags (int argc, char **argv, SynthFlags &flags)
      "whole scenes: how far beyond the image's edges a torso may stand, as a share of its width and height")
     ("resolution", po::value (&flags.resolution),
      "frame size WxH with the sensor's field of view, e.g. 320x240 for a kinect frame at half resolution")
+    ("kinect-window", po::value (&options.kinect_window)->default_value (0),
+     "kinect and bonn: the correlation window's side at 640x480, odd 1-31 pixels (thins far limbs, rounds "
+     "silhouettes; doc/sensors.md); 0: the model's default, off")
     ("clutter", po::value (&options.clutter)->default_value (options.clutter), "desks, chairs, shelves and boxes (1 or 0)")
     ("config", po::value (&flags.config),
      "a file of flag = value lines (the flags above without their dashes); flags on the command line win")
@@ -175,6 +178,9 @@ parseSynthFlags (int argc, char **argv, SynthFlags &flags)
   options.bvh_scale = parseBvhScale (flags.bvh_scale);
   if (!parseSynthLayout (flags.layout, options.layout))
     throw std::runtime_error ("unknown --layout '" + flags.layout + "' (expected aimed or whole)");
+  if (options.kinect_window != 0 && (options.kinect_window < 1 || options.kinect_window > 31 || options.kinect_window % 2 == 0))
+    throw std::runtime_error ("--kinect-window must be an odd 1-31 pixels (or 0: off), got " +
+                              std::to_string (options.kinect_window));
   if (!flags.resolution.empty ())
     parseResolution (flags.resolution, options.width, options.height);
   auto share = [] (double value, const char *flag, double most) {

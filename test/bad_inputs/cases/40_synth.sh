@@ -17,3 +17,4 @@ check "agex_synth: a config file's bad value" 1 "min-pitch and --max-pitch must 
 check "agex_synth: a config file's unknown setting" 1 "synth_unknown.cfg: .*no-such-setting" $S --config in/synth_unknown.cfg --output out/synth_h
 check "agex_synth: a config file of 70 KB" 1 "synth_huge.cfg: 70000 bytes, more than a config file" $S --config in/synth_huge.cfg --output out/synth_i
 check "agex_synth: a missing config file" 1 "absent.cfg: cannot read it" $S --config in/absent.cfg --output out/synth_j
+check "agex_synth: an even correlation window" 1 "kinect-window must be an odd 1-31 pixels" $S --kinect-window 4 --output out/synth_k

@@ -21,7 +21,11 @@
 // raw output, so the same seed gives the same bytes on every run and platform with
 // the same floating point.
 
+#include <agex/simulation/body_model.h>
 #include <agex/simulation/body_shape.h>
+#include <agex/simulation/motion_clip.h>
+#include <agex/simulation/synth_frame.h>
+#include <agex/simulation/synth_labels.h>
 #include <agex/simulation/bvh.h>
 #include <agex/simulation/scene_primitives.h>
 #include <agex/simulation/sensor_model.h>
@@ -47,161 +51,6 @@
 
 namespace agex
 {
-// ---------------------------------------------------------------------------
-
-// ---------------------------------------------------------------------------
-// Bodies
-
-/** Per-subject body shape; every length of the body model is in metres. */
-struct BodyParams
-{
-  double height_scale = 1.0;  ///< multiplies the skeleton (and every size below)
-  double girth = 1.0;         ///< multiplies torso and limb radii
-  double head_scale = 1.0;    ///< multiplies the head ellipsoid
-  double arm_girth = 1.0;     ///< extra factor on arm radii
-  double leg_girth = 1.0;     ///< extra factor on leg radii
-  double torso_depth = 1.0;   ///< front-back size of the torso
-  double reflectivity = 0.7;  ///< clothes and skin, 0..1
-
-  /** Draws a subject: height 0.92-1.08, girth 0.85-1.25, head 0.93-1.07, arms and legs
-    * 0.9-1.12, torso depth 0.9-1.2, reflectivity 0.45-0.9. */
-  static BodyParams random (SynthRng &rng);
-  /** "height_scale=1.02 girth=0.93 ..." */
-  std::string describe () const;
-};
-
-/** The joints the body model hangs on, found by name in a BVH skeleton. Two naming
-  * schemes are known: CMU ASF conversions (LeftUpLeg, LeftLeg, LeftFoot, LeftToeBase,
-  * Spine, Spine1, Neck, Head, LeftArm, LeftForeArm, LeftHand, LeftHandIndex1) and the
-  * bvh11 / CMU 131 scheme (LeftHip, LeftKnee, LeftAnkle, LeftToe, Chest, Chest2,
-  * lowerneck, Head, LeftShoulder, LeftElbow, LeftWrist, LFingers); index 0 = left. */
-struct SkeletonMap
-{
-  int root = -1, spine_base = -1, spine_mid = -1, neck = -1, head = -1, head_end = -1;
-  int shoulder[2] = {-1, -1}, elbow[2] = {-1, -1}, wrist[2] = {-1, -1}, hand_end[2] = {-1, -1};
-  int hip[2] = {-1, -1}, knee[2] = {-1, -1}, ankle[2] = {-1, -1}, toe[2] = {-1, -1}, toe_end[2] = {-1, -1};
-  /** Rest-pose directions in the file's world frame: the subject's left, up and forward. */
-  Eigen::Matrix3d rest_basis = Eigen::Matrix3d::Identity ();
-
-  /** \brief Finds the joints. \throws BvhError naming the file and the missing joint */
-  static SkeletonMap find (const BvhMotion &motion);
-};
-
-/** A motion capture clip ready to pose bodies. */
-struct MotionClip
-{
-  BvhMotion motion;
-  SkeletonMap map;
-  double scale = 1.0;          ///< metres per file unit
-  bool scale_auto = true;      ///< scale was detected (autoBvhScale)
-  std::string sequence;        ///< the file's stem
-
-  /** \brief Reads a BVH file; scale <= 0 means auto (autoBvhScale).
-    * \throws BvhError naming the file (and line) */
-  static MotionClip load (const std::string &path, double scale = 0.0);
-};
-
-/** A posed body in the clip's world frame (metres, Y up). */
-struct BodyModel
-{
-  std::vector<SynthPrimitive> primitives;  ///< all SynthObject::Person
-  /** Tip and base of the head (0), the hands (1: left, 2: right) and feet (3: left,
-    * 4: right); tips on the body surface. */
-  Eigen::Vector3d tip[5], base[5];
-  /** Per tip: the primitives of its part (head ellipsoid; hand; foot and toes) and the
-    * depth tolerance of its visibility test: the part's radius + 3 cm, since the
-    * surface seen near a tip on the part's silhouette is up to a radius in front of it. */
-  std::vector<int> tip_primitives[5];
-  double tip_tolerance[5] = {0, 0, 0, 0, 0};
-  /** Middle of the torso (between the root and the neck). */
-  Eigen::Vector3d centre = Eigen::Vector3d::Zero ();
-  /** Lowest and highest point of the body (Y). */
-  double lowest = 0.0, highest = 0.0;
-  /** The same body after a rigid transform. */
-  BodyModel transformed (const Eigen::Isometry3d &transform) const;
-};
-
-/** \brief Poses the body model on frame `frame` of a clip (-1 = rest pose). */
-BodyModel buildBody (const MotionClip &clip, int frame, const BodyParams &params);
-
-class HumanMesh;
-
-/** \brief Poses the MakeHuman mesh body on frame `frame` of a clip (-1 = rest pose):
-  * the mesh is scaled to the clip's rest height times params.height_scale, shaped by
-  * the other params (a shaped mesh, HumanMesh::isShaped, keeps its own size and girth
-  * instead: only params.reflectivity is used, and the clip's motion is scaled to the
-  * mesh's height; doc/synthetic.md, "Body shapes"), and each bone follows the motion capture segment it lies on
-  * (rotation of the segment's joint, then turned so the bone points where the segment
-  * does; doc/synthetic.md). One mesh primitive per HumanMesh::Part, in its order
-  * (trunk, head, hands, feet, arms, legs); tips are mesh vertices (top of the head, middle finger tips,
-  * toe fronts), bases the neck, wrist and ankle joints. */
-BodyModel buildMeshBody (const MotionClip &clip, int frame, const BodyParams &params, const HumanMesh &mesh);
-
-/** Heads of the mesh's bones (indexed like mesh.bones()) posed as buildMeshBody poses
-  * them: the posed skeleton. */
-std::vector<Eigen::Vector3d> meshBoneHeads (const MotionClip &clip, int frame, const BodyParams &params,
-                                            const HumanMesh &mesh);
-
-/** Lowest point (Y) of the posed mesh body's feet and a sample of its other vertices:
-  * what the floor is placed by, without building the whole body. */
-double meshBodyLowest (const MotionClip &clip, int frame, const BodyParams &params, const HumanMesh &mesh);
-
-/** Height of the body model in the clip's rest pose (head top to sole), metres. */
-double restStandingHeight (const MotionClip &clip, const BodyParams &params = BodyParams ());
-
-// ---------------------------------------------------------------------------
-// Rendering
-
-/** How a label's visibility was decided (parallel to SynthFrame::labels). */
-struct SynthLabelCheck
-{
-  std::vector<int> primitives;  ///< scene primitives of the tip's part
-  double tolerance = 0.05;      ///< metres
-};
-
-/** Where one person of a scene with several (SynthOptions::people > 1) stands and
-  * what they do. The camera stands on the floor plan's origin and looks along its view
-  * direction (before the aim's jitter). */
-struct SynthPersonPlacement
-{
-  int clip = 0, clip_frame = 0, subject = 0;
-  double distance = 2.0;  ///< horizontal, camera to the middle of the torso, metres
-  double bearing = 0.0;   ///< radians from the view direction, positive to the image's right
-  double facing = 0.0;    ///< the body's turn about the vertical, radians
-};
-
-/** A rendered frame, in the camera frame (x right, y down, z forward, metres). */
-struct SynthFrame
-{
-  pcl::PointCloud<pcl::PointXYZ> cloud;  ///< organized, NaN = invalid (the sensor output)
-  std::vector<PartLabel> labels;         ///< head, hands, feet (frame id left empty)
-  std::vector<SynthLabelCheck> label_checks;  ///< parallel to labels
-  // Ground truth per pixel (row-major), noise free:
-  std::vector<SynthObject> object;  ///< what most of the pixel's samples hit
-  std::vector<int> primitive;       ///< scene primitive seen at the pixel centre, -1 if none
-  std::vector<float> ideal_z;       ///< depth at the pixel centre, NaN if nothing
-  std::vector<float> sample_min_z, sample_max_z;  ///< over the pixel's samples (NaN if none hit)
-  /** Depth the sensor measured before its noise, shadows and holes: sr4000, that of the
-    * amplitude-weighted blend of the samples' ranges (along the centre ray); kinect, the
-    * centre ray's. NaN where it measured nothing. */
-  std::vector<float> clean_z;
-  /** Per pixel: the SynthPart of the body surface the pixel's depth shows, 0 for the
-    * room, nothing, or no valid depth (doc/synthetic.md, "Part labels"). */
-  std::vector<std::uint8_t> part_label;
-  /** Per pixel: the person (SynthPrimitive::person, 1, 2, ...) of that surface; 0 where
-    * part_label is 0. */
-  std::vector<std::uint8_t> person_label;
-  /** Colour image (row-major r, g, b), filled by shadeColour; empty for depth-only frames. */
-  std::vector<std::array<std::uint8_t, 3>> colour;
-  SynthScene scene;                 ///< the scene in the camera frame
-  Eigen::Isometry3d world_to_camera = Eigen::Isometry3d::Identity ();
-  // What was drawn (for several people: those of person 1, the nearest):
-  int clip = 0, clip_frame = 0, subject = 0;
-  std::string sequence;
-  /** Several people: person k + 1 stands at people[k], nearest first; empty for one. */
-  std::vector<SynthPersonPlacement> people;
-};
-
 /** \brief Renders a scene (camera frame) with a sensor model; draws the noise from rng.
   * Fills the cloud, the per-pixel ground truth and the part and person labels of the
   * surfaces the depth pixels show: kinect, the surface the pixel-centre ray hits;
@@ -218,23 +67,6 @@ void renderScene (const SynthScene &scene, const SensorModel &sensor, SynthRng &
   * renderScene; registered with the depth (the colour camera sits at the depth camera).
   * Draws everything from rng, never from the frame's depth noise. */
 void shadeColour (const SensorModel &sensor, SynthRng &rng, SynthFrame &frame);
-
-/** \brief Labels for the body's tips and bases (camera frame, the body's primitives
-  * first in frame.scene), projected with the sensor's intrinsics. A tip is visible if
-  * its pixel is in the image and within labelWindow() pixels of it a pixel with a valid
-  * depth within the part's tolerance of the tip's depth sees the tip's own part (the
-  * noise-free centre ray hits one of its primitives). Instance 0 is the one on the
-  * image's left (smaller tip u). Fills frame.labels and frame.label_checks. */
-void makeLabels (const BodyModel &body_in_camera, const SensorModel &sensor, SynthFrame &frame);
-
-/** \brief The same for one person of several: appends the five labels of a body whose
-  * primitives start at index first_primitive of frame.scene, with PartLabel::person =
-  * person (and the checks' primitives as scene indices). */
-void appendPersonLabels (const BodyModel &body_in_camera, const SensorModel &sensor, int first_primitive, int person,
-                         SynthFrame &frame);
-
-/** Half size of the label visibility window: 1 (3x3) for sr4000, 2 (5x5) for kinect. */
-int labelWindow (const SensorModel &sensor);
 
 /** How a frame's camera and people are laid out (doc/synthetic.md, "Whole scenes"). */
 enum class SynthLayout
@@ -286,6 +118,10 @@ struct SynthOptions
   /** Frame size; 0: the sensor's own. Another size keeps the sensor's field of view (the
     * intrinsics scale with it), so 320x240 is a Kinect frame at half resolution. */
   int width = 0, height = 0;
+  /** Kinect v1 (kinect and bonn): the correlation window's side in pixels at 640x480, odd,
+    * 1-31 (scaled with the frame size); 0: the model's default (off). On, it takes the
+    * fitted foreground weight 1.5 (doc/sensors.md). */
+  int kinect_window = 0;
   /** A MakeHuman directory (base.obj, default.mhskel, default_weights.mhw) for mesh
     * bodies (buildMeshBody); empty: capsule and ellipsoid bodies (buildBody). */
   std::string body_mesh;

@@ -1,0 +1,33 @@
+#!/usr/bin/env bash
+# Reproduces data/models/agex_synthetic_forest.agexforest from ../shared: a per-pixel body-part
+# forest trained on synthetic frames alone (doc/results.md, "Synthetic people, real frames"):
+# MakeHuman bodies of 24 sampled shapes, posed from the pose bank (CMU cc clips, the CMU
+# everyday pose bank, 2,000 procedural poses, thinned at 5 cm), in whole scenes and aimed
+# portrait views, through every sensor model: Kinect v1 at 640x480 and 320x240, Kinect v2-like
+# time of flight at 512x424, and the Bonn frames' 8-bit portrait view. No real frame is used.
+# Takes about 40 minutes on 2 cores (rendering about 6, training the rest).
+#   scripts/train_synthetic_forest.sh [BUILD_DIR] [WORK_DIR] [OUT]
+set -euo pipefail
+ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+BIN="${1:-$ROOT/build}/bin"
+WORK="${2:-$(mktemp -d)}"
+OUT="${3:-$ROOT/data/models/agex_synthetic_forest.agexforest}"
+SHARED="$ROOT/../shared/data"
+M="$SHARED/mocap"
+for need in "$M/cmu_cc" "$M/cmu_poses" "$SHARED/makehuman/targets"; do
+  [ -d "$need" ] || { echo "train_synthetic_forest: $need is missing (see ../shared/README.md)" >&2; exit 1; }
+done
+COMMON=(--pose-dir "$M/cmu_cc" --pose-dir "$M/cmu_poses" --procedural-poses 2000 --thin-poses 0.05
+        --body-mesh "$SHARED/makehuman" --body-shapes --subjects 24)
+render () {
+  local name=$1; shift
+  [ -f "$WORK/$name/dataset.json" ] || "$BIN/agex_synth" "${COMMON[@]}" "$@" --output "$WORK/$name" > "$WORK/$name.log"
+}
+# Two at a time, one per core.
+( render k640 --layout whole --people 3 --sensor kinect --frames 500 --seed 101
+  render k2 --layout whole --people 3 --sensor kinect2 --frames 200 --seed 103 ) &
+( render k320 --layout whole --people 3 --sensor kinect --resolution 320x240 --frames 400 --seed 102
+  render bonn --sensor bonn --frames 500 --seed 104 ) &
+wait
+"$BIN/agex_train_forest" --dataset "$WORK/k640" --dataset "$WORK/k320" --dataset "$WORK/k2" --dataset "$WORK/bonn" \
+  --threads 2 --out "$OUT"

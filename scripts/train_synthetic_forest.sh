@@ -26,8 +26,10 @@ render () {
 # Two at a time, one per core.
 ( render k640 --layout whole --people 3 --sensor kinect --frames 500 --seed 101
   render k2 --layout whole --people 3 --sensor kinect2 --frames 200 --seed 103 ) &
+first=$!
 ( render k320 --layout whole --people 3 --sensor kinect --resolution 320x240 --frames 400 --seed 102
   render bonn --sensor bonn --frames 500 --seed 104 ) &
-wait
+second=$!
+wait "$first" && wait "$second" || { echo "train_synthetic_forest: rendering failed (logs in $WORK)" >&2; exit 1; }
 "$BIN/agex_train_forest" --dataset "$WORK/k640" --dataset "$WORK/k320" --dataset "$WORK/k2" --dataset "$WORK/bonn" \
   --threads 2 --out "$OUT"

@@ -6,6 +6,8 @@
 # close-range upper bodies, five_people.pcd).
 #   scripts/evaluate_sim_to_real.sh FOREST OUT_DIR [BUILD_DIR] [WORK_DIR]
 # FOREST: a .agexforest file or a folder of PCL trees. Prints one table row per view.
+# AGEX_FOREST_FLAGS: extra agex_eval detect flags, e.g. "--forest-input meshes --forest-parts
+# modes" for forest mode as it was before PCL's way of turning labels into parts.
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 FOREST=$1 OUT=$2
@@ -22,7 +24,7 @@ ALL=1,2,3,4,5,6,7,8
 for view in portrait full; do
   [ -d "$WORK/bonn-$view" ] || "$BIN/agex_convert" bonn --input "$SHARED/bonn" --output "$WORK/bonn-$view" --view "$view" >/dev/null
   "$BIN/agex_eval" detect --dataset "$WORK/bonn-$view@$ALL" --keyframes --model "$MODEL" --detector-mode forest \
-    --forest "$FOREST" --json "$OUT/detect_$view.json" > "$OUT/detect_$view.log" 2>&1
+    --forest "$FOREST" ${AGEX_FOREST_FLAGS:-} --json "$OUT/detect_$view.json" > "$OUT/detect_$view.log" 2>&1
   "$BIN/agex_eval" parts --dataset "$WORK/bonn-$view@$ALL" --keyframes --model "$MODEL" --forest "$FOREST" \
     --json "$OUT/parts_$view.json" > "$OUT/parts_$view.log" 2>&1
 done

@@ -194,15 +194,15 @@ SynthGenerator::SynthGenerator (const SynthOptions &options_in)
       shaped_.push_back (std::make_shared<const HumanMesh> (mesh_->shaped (targets, shapes_.back ())));
     }
   }
-  // The floor of a clip for a subject: the lowest the body gets over the whole clip; the
-  // bank stands every pose on y = 0 itself.
+  // The floor of a clip for a subject: the lowest the body gets over the whole clip; a
+  // bank pose stands on its own lowest point (floorUnder).
   floor_.resize (clips_.size ());
   for (std::size_t c = 0; c < clips_.size (); ++c)
     for (std::size_t s = 0; s < subjects_.size (); ++s)
     {
       if (pose_bank)
       {
-        floor_[c].push_back (0.0);
+        floor_[c].push_back (std::numeric_limits<double>::quiet_NaN ());
         continue;
       }
       const BodyParams &params = subjects_[s];
@@ -213,6 +213,13 @@ SynthGenerator::SynthGenerator (const SynthOptions &options_in)
                                         : buildBody (clips_[c], f, params).lowest);
       floor_[c].push_back (lowest);
     }
+}
+
+double
+SynthGenerator::floorUnder (int clip, int subject, const BodyModel &body) const
+{
+  const double floor_y = floor_[static_cast<std::size_t> (clip)][static_cast<std::size_t> (subject)];
+  return std::isnan (floor_y) ? body.lowest : floor_y;
 }
 
 const HumanMesh *
@@ -449,7 +456,7 @@ SynthGenerator::renderPlaced (SynthRng &rng, std::uint64_t index, const std::vec
   {
     const SynthPersonPlacement &p = people[k];
     const BodyModel body = bodies ? (*bodies)[k] : this->body (p.clip, p.clip_frame, p.subject);
-    const double floor_y = floor_[static_cast<std::size_t> (p.clip)][static_cast<std::size_t> (p.subject)];
+    const double floor_y = floorUnder (p.clip, p.subject, body);
     const Eigen::Isometry3d to_plan = Eigen::Translation3d (placementSpot (p)) * Eigen::AngleAxisd (p.facing, up) *
                                       Eigen::Translation3d (-body.centre.x (), -floor_y, -body.centre.z ());
     placed.push_back (body.transformed (to_plan));
@@ -552,9 +559,7 @@ SynthGenerator::renderWhole (std::uint64_t index) const
     p.subject = rng.index (static_cast<int> (subjects_.size ()));
     p.facing = rng.uniform (0.0, 2.0 * M_PI);
   };
-  auto floor_of = [&] (const SynthPersonPlacement &p) {
-    return floor_[static_cast<std::size_t> (p.clip)][static_cast<std::size_t> (p.subject)];
-  };
+  auto floor_of = [&] (const SynthPersonPlacement &p, const BodyModel &body) { return floorUnder (p.clip, p.subject, body); };
   std::vector<SynthPersonPlacement> people;
   std::vector<BodyModel> bodies;
 
@@ -567,7 +572,7 @@ SynthGenerator::renderWhole (std::uint64_t index) const
     p.distance = rng.uniform (0.7, 1.6);
     p.bearing = rng.normal (0.0, 0.05);
     BodyModel body = this->body (p.clip, p.clip_frame, p.subject);
-    const double floor_y = floor_of (p);
+    const double floor_y = floor_of (p, body);
     const double top = body.highest - floor_y, torso = body.centre.y () - floor_y;
     const Eigen::Vector3d spot = Eigen::Vector3d (-p.distance * std::sin (p.bearing), 0.0, p.distance * std::cos (p.bearing));
     const Eigen::Vector3d camera (0.0, std::max (0.3, top - 0.35 + rng.normal (0.0, 0.1)), 0.0);
@@ -595,7 +600,7 @@ SynthGenerator::renderWhole (std::uint64_t index) const
     SynthPersonPlacement p;
     draw_pose (p);
     BodyModel body = this->body (p.clip, p.clip_frame, p.subject);
-    const double r = horizontalReach (body), torso = body.centre.y () - floor_of (p);
+    const double r = horizontalReach (body), torso = body.centre.y () - floor_of (p, body);
     // Where the torso must be seen: within the image grown by the border share.
     auto seen = [&] (const SynthPersonPlacement &q) {
       const Eigen::Vector3d c = world_to_camera * (placementSpot (q) + Eigen::Vector3d (0.0, torso, 0.0));
@@ -654,7 +659,7 @@ SynthGenerator::renderOne (std::uint64_t index) const
   frame.subject = rng.index (static_cast<int> (subjects_.size ()));
   frame.sequence = clip.sequence;
   const BodyModel body = this->body (frame.clip, frame.clip_frame, frame.subject);
-  const double floor_y = floor_[frame.clip][frame.subject];
+  const double floor_y = floorUnder (frame.clip, frame.subject, body);
 
   // Camera: around the person at a random azimuth, distance and height, aimed at the
   // torso with a jitter (sometimes a large one, so the person leaves the frame).

@@ -204,7 +204,11 @@ private:
   std::shared_ptr<const HumanMesh> mesh_;
   std::vector<BodyShape> shapes_;                           ///< per subject, with body_shapes
   std::vector<std::shared_ptr<const HumanMesh>> shaped_;  ///< per subject, with body_shapes
-  std::vector<std::vector<double>> floor_;  ///< [clip][subject]: floor height, clip frame
+  /** The floor under a posed body: its clip's lowest over the whole clip (so hops leave the
+    * floor), or, for the pose bank's poses (NaN in floor_), the body's own lowest point, so
+    * that the shaped mesh's soles, not the skeleton's joints, stand on it. */
+  double floorUnder (int clip, int subject, const BodyModel &body) const;
+  std::vector<std::vector<double>> floor_;  ///< [clip][subject]: floor height, clip frame; NaN: each pose's own
 };
 
 /** Frame ids: "000123". */

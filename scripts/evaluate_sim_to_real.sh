@@ -35,6 +35,7 @@ maps () {
   "$BIN/agex_detect" "$@" --model "$MODEL" --detector-mode forest --forest "$FOREST" \
     --parts-overlay "$OUT/part_maps/$name.png" > /dev/null 2>&1 || echo "evaluate_sim_to_real: no part map for $name" >&2
 }
+maps bonn_1_002 "$ROOT/data/frames/bonn_1_002.png"
 for f in "$SHARED"/kinect/skeltrack/depth-data-1028894671.u16 "$SHARED"/kinect/skeltrack/depth-data-1399145206.u16; do
   [ -f "$f" ] && maps "skeltrack_$(basename "$f" .u16)" "$f"
 done

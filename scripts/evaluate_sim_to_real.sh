@@ -6,7 +6,8 @@
 # close-range upper bodies, five_people.pcd).
 #   scripts/evaluate_sim_to_real.sh FOREST OUT_DIR [BUILD_DIR] [WORK_DIR]
 # FOREST: a .agexforest file or a folder of PCL trees. Prints one table row per view.
-# AGEX_FOREST_FLAGS: extra agex_eval detect flags, e.g. "--forest-input meshes --forest-parts
+# AGEX_PIPELINE_MODEL: the model whose pipeline settings forest mode runs (default the
+# bundled AGEX model). AGEX_FOREST_FLAGS: extra agex_eval detect flags, e.g. "--forest-input meshes --forest-parts
 # modes" for forest mode as it was before PCL's way of turning labels into parts.
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -19,7 +20,7 @@ SHARED="$ROOT/../shared/data"
 mkdir -p "$OUT" "$WORK"
 # The pipeline's settings (person isolation, cleaning) of the bundled models; forest mode
 # uses nothing else of the model.
-MODEL="$ROOT/data/models/agex_bonn_agex.yml"
+MODEL="${AGEX_PIPELINE_MODEL:-$ROOT/data/models/agex_bonn_agex.yml}"
 ALL=1,2,3,4,5,6,7,8
 for view in portrait full; do
   [ -d "$WORK/bonn-$view" ] || "$BIN/agex_convert" bonn --input "$SHARED/bonn" --output "$WORK/bonn-$view" --view "$view" >/dev/null

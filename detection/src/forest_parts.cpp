@@ -112,14 +112,7 @@ forestParts (const DepthPipelineResult &prepared, const pcl::PointCloud<pcl::Poi
   }
   if (body->empty ())
     return false;
-  BodyPartLabeling<pcl::PointXYZ> labeling;
-  labeling.setInputCloud (persons ? frame : prepared.filtered);
-  labeling.setIndices (body);
-  labeling.setForest (forest);
-  labeling.setFocalLength (fx, fy);
-  stride = forestStrideFor (stride, fx);
-  labeling.setStride (stride);
-  if (!labeling.compute (labels))
+  if (!labelBodyPixels (persons ? frame : prepared.filtered, body, forest, fx, fy, stride, labels))
     return false;
   const auto labelled = std::chrono::steady_clock::now ();
   bool found = false;

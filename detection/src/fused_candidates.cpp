@@ -67,6 +67,21 @@ forestStrideFor (int stride, float fx)
 }
 
 bool
+labelBodyPixels (const pcl::PointCloud<pcl::PointXYZ>::ConstPtr &cloud, const std::shared_ptr<pcl::Indices> &body,
+                 const BodyPartForest::ConstPtr &forest, float fx, float fy, int &stride,
+                 pcl::PointCloud<BodyPartLabelPoint> &labels)
+{
+  BodyPartLabeling<pcl::PointXYZ> labeling;
+  labeling.setInputCloud (cloud);
+  labeling.setIndices (body);
+  labeling.setForest (forest);
+  labeling.setFocalLength (fx, fy);
+  stride = forestStrideFor (stride, fx);
+  labeling.setStride (stride);
+  return labeling.compute (labels);
+}
+
+bool
 labelPersonParts (const DepthPipelineResult &prepared, const BodyPartForest::ConstPtr &forest, float fx, float fy,
                   int stride, pcl::PointCloud<BodyPartLabelPoint> &labels, std::vector<PartMode> &modes,
                   std::pair<double, double> *ms)
@@ -77,14 +92,8 @@ labelPersonParts (const DepthPipelineResult &prepared, const BodyPartForest::Con
   if (!forest || !prepared.filtered || prepared.meshes.empty () || !(fx > 0.f) || !(fy > 0.f))
     return false;
   const std::vector<int> body = prepared.meshIndices ();
-  BodyPartLabeling<pcl::PointXYZ> labeling;
-  labeling.setInputCloud (prepared.filtered);
-  labeling.setIndices (std::make_shared<pcl::Indices> (body.begin (), body.end ()));
-  labeling.setForest (forest);
-  labeling.setFocalLength (fx, fy);
-  stride = forestStrideFor (stride, fx);
-  labeling.setStride (stride);
-  if (!labeling.compute (labels))
+  if (!labelBodyPixels (prepared.filtered, std::make_shared<pcl::Indices> (body.begin (), body.end ()), forest, fx, fy,
+                        stride, labels))
     return false;
   const auto labelled = std::chrono::steady_clock::now ();
   PartModeEstimation estimation;

@@ -27,13 +27,6 @@ namespace
 {
 constexpr double kInf = std::numeric_limits<double>::infinity ();
 
-std::string
-fixed (double v, int digits = 3)
-{
-  std::ostringstream out;
-  out << std::fixed << std::setprecision (digits) << v;
-  return out.str ();
-}
 
 
 }  // namespace
@@ -241,6 +234,25 @@ SynthGenerator::body (int clip, int clip_frame, int subject) const
 
 namespace
 {
+/** Orders people (and their bodies alike) by distance, nearest first; ties keep their order. */
+void
+sortNearestFirst (std::vector<SynthPersonPlacement> &people, std::vector<BodyModel> &bodies)
+{
+  std::vector<std::size_t> order (people.size ());
+  std::iota (order.begin (), order.end (), 0);
+  std::stable_sort (order.begin (), order.end (),
+                    [&] (std::size_t a, std::size_t b) { return people[a].distance < people[b].distance; });
+  std::vector<SynthPersonPlacement> sorted;
+  std::vector<BodyModel> sorted_bodies;
+  for (const std::size_t i : order)
+  {
+    sorted.push_back (people[i]);
+    sorted_bodies.push_back (std::move (bodies[i]));
+  }
+  people = std::move (sorted);
+  bodies = std::move (sorted_bodies);
+}
+
 /** How far a body reaches horizontally from its centre (the middle of its torso). */
 double
 horizontalReach (const BodyModel &body)
@@ -410,20 +422,8 @@ SynthGenerator::drawPeople (std::uint64_t index, std::vector<BodyModel> &bodies)
     reach.push_back (r);
     bodies.push_back (std::move (body));
   }
-  // Person 1 is the nearest.
-  std::vector<std::size_t> order (people.size ());
-  std::iota (order.begin (), order.end (), 0);
-  std::stable_sort (order.begin (), order.end (),
-                    [&] (std::size_t a, std::size_t b) { return people[a].distance < people[b].distance; });
-  std::vector<SynthPersonPlacement> sorted;
-  std::vector<BodyModel> sorted_bodies;
-  for (const std::size_t i : order)
-  {
-    sorted.push_back (people[i]);
-    sorted_bodies.push_back (std::move (bodies[i]));
-  }
-  bodies = std::move (sorted_bodies);
-  return sorted;
+  sortNearestFirst (people, bodies);  // person 1 is the nearest
+  return people;
 }
 
 SynthFrame
@@ -629,20 +629,9 @@ SynthGenerator::renderWhole (std::uint64_t index) const
     reach.push_back (r);
     bodies.push_back (std::move (body));
   }
-  // Person 1 is the nearest, as in render ().
-  std::vector<std::size_t> order (people.size ());
-  std::iota (order.begin (), order.end (), 0);
-  std::stable_sort (order.begin (), order.end (),
-                    [&] (std::size_t a, std::size_t b) { return people[a].distance < people[b].distance; });
-  std::vector<SynthPersonPlacement> sorted;
-  std::vector<BodyModel> sorted_bodies;
-  for (const std::size_t i : order)
-  {
-    sorted.push_back (people[i]);
-    sorted_bodies.push_back (std::move (bodies[i]));
-  }
+  sortNearestFirst (people, bodies);  // person 1 is the nearest, as in render ()
   const bool background_removed = rng.chance (options_.background_removed_share);
-  SynthFrame frame = renderPlaced (rng, index, sorted, &sorted_bodies, &world_to_camera, true);
+  SynthFrame frame = renderPlaced (rng, index, people, &bodies, &world_to_camera, true);
   if (background_removed)
     removeBackground (frame);
   return frame;
@@ -734,7 +723,7 @@ SynthGenerator::datasetInfo () const
   p << "; subjects:";
   for (std::size_t s = 0; s < subjects_.size (); ++s)
     p << " #" << s << " " << subjects_[s].describe ()
-      << (s < shapes_.size () ? " shape " + shapes_[s].describe () + " (" + fixed (shaped_[s]->height ()) + " m)" : "")
+      << (s < shapes_.size () ? " shape " + shapes_[s].describe () + " (" + std::to_string (std::lround (shaped_[s]->height () * 1000.0)) + " mm)" : "")
       << (s + 1 < subjects_.size () ? ";" : "");
   p << "; each frame draws (clip, clip frame, subject, camera, room, noise) from its own generator; see "
        "doc/synthetic.md";

@@ -32,6 +32,13 @@ bool labelPersonParts (const DepthPipelineResult &prepared, const BodyPartForest
                        int stride, pcl::PointCloud<BodyPartLabelPoint> &labels, std::vector<PartMode> &modes,
                        std::pair<double, double> *ms = nullptr);
 
+/** \brief Labels the given pixels of a cloud with a forest (agex::BodyPartLabeling at focal
+  * lengths fx, fy and the pixel stride forestStrideFor (stride, fx), which is stored back in
+  * stride). \return false if the labelling failed */
+bool labelBodyPixels (const pcl::PointCloud<pcl::PointXYZ>::ConstPtr &cloud, const std::shared_ptr<pcl::Indices> &body,
+                      const BodyPartForest::ConstPtr &forest, float fx, float fy, int &stride,
+                      pcl::PointCloud<BodyPartLabelPoint> &labels);
+
 /** \brief The forest's pixel stride for a camera of focal length fx (pixels): stride itself
   * when positive; 0 (auto) gives one evaluated pixel per cell of about 4 mm at 1 m
   * (floor (fx / 250), at least 1, at most 8): 1 at 144x176 (fx 210), 2 at 640x480 (525), 4 at

@@ -1,12 +1,12 @@
-// agex_sensor_stats: the statistics that tell depth sensors apart (agex::DepthFrameStatistics),
+// sensor_stats: the statistics that tell depth sensors apart (agex::DepthFrameStatistics),
 // on real frames and on synthetic frames of each sensor model, for fitting the models
 // (doc/sensors.md).
-//   agex_sensor_stats real NAME [--masked|--segment] FILE...   depth images (.u16, .png) or
+//   sensor_stats real NAME [--masked|--segment] FILE...   depth images (.u16, .png) or
 //                 PCDs; person masks: --masked, the valid pixels (frames whose background is
 //                 zeroed); --segment, the persons agex::PersonSegmentation finds
-//   agex_sensor_stats synth SENSOR MOTION.bvh FRAMES [WIDTH HEIGHT]
-//   agex_sensor_stats limbs SENSOR [WIDTH HEIGHT]   forearm survival at 1-4 m
-//   agex_sensor_stats picture OUT.png REAL_FILE SENSOR MOTION.bvh FRAME [MIN_M MAX_M [NEAR_M FAR_M]]
+//   sensor_stats synth SENSOR MOTION.bvh FRAMES [WIDTH HEIGHT]
+//   sensor_stats limbs SENSOR [WIDTH HEIGHT]   forearm survival at 1-4 m
+//   sensor_stats picture OUT.png REAL_FILE SENSOR MOTION.bvh FRAME [MIN_M MAX_M [NEAR_M FAR_M]]
 //                 the real frame beside a synthetic one (person NEAR-FAR m away), 240 px high
 #include <agex/filters/person_segmentation.h>
 #include <agex/io/frame_io.h>
@@ -252,13 +252,13 @@ main (int argc, char **argv)
       return walls (argc, argv);
     if (mode == "picture")
       return picture (argc, argv);
-    std::cerr << "usage: agex_sensor_stats real NAME [--masked] FILE... | synth SENSOR MOTION.bvh FRAMES | "
+    std::cerr << "usage: sensor_stats real NAME [--masked] FILE... | synth SENSOR MOTION.bvh FRAMES | "
                  "limbs SENSOR [WIDTH HEIGHT]\n";
     return 2;
   }
   catch (const std::exception &e)
   {
-    std::cerr << "agex_sensor_stats: " << e.what () << "\n";
+    std::cerr << "sensor_stats: " << e.what () << "\n";
     return 1;
   }
 }

@@ -3,6 +3,7 @@
 // same bytes.
 
 #include <agex/apps/command_line.h>
+#include <agex/apps/output.h>
 #include <agex/apps/output_guard.h>
 #include <agex/apps/synth_flags.h>
 #include <agex/io/atomic_file.h>
@@ -24,6 +25,11 @@ main (int argc, char **argv)
       return 0;
     if (!flags.pose_report.empty ())
     {
+      // The picture may replace only an earlier PNG of agex's, never an input.
+      std::vector<std::string> report_inputs = flags.options.motion_files;
+      report_inputs.insert (report_inputs.end (), flags.options.pose_dirs.begin (), flags.options.pose_dirs.end ());
+      agex::apps::checkOutputPath (flags.pose_report, agex::apps::OutputKind::Png, agex::InputFiles (report_inputs),
+                                   flags.force);
       const agex::PoseBank bank = agex::poseBankOf (flags.options);
       for (const auto &s : bank.sources ())
         std::cout << "pose bank: " << s.name << ": " << s.raw << " poses read, " << s.dropped << " dropped, " << s.kept
@@ -39,7 +45,7 @@ main (int argc, char **argv)
                        100 * h.above_head, 100 * h.forward, 100 * h.behind, 100 * h.across);
         std::cout << line;
       }
-      bank.writeSpreadImage (flags.pose_report);
+      agex::apps::writePng (flags.pose_report, bank.spreadImage ());
       std::cout << flags.pose_report << ": hand positions written\n";
       if (flags.report_only)
         return 0;

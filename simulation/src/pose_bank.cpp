@@ -297,8 +297,8 @@ PoseBank::handSpread () const
   return out;
 }
 
-void
-PoseBank::writeSpreadImage (const std::string &path) const
+cv::Mat
+PoseBank::spreadImage () const
 {
   // Two panels, front (x, y) and top (x, z), 2.4 m across each, the legend below.
   const int panel = 440, ppm = 180;
@@ -340,16 +340,6 @@ PoseBank::writeSpreadImage (const std::string &path) const
     cv::putText (image, sources_[s].name, cv::Point (x, panel + 50), cv::FONT_HERSHEY_SIMPLEX, 0.5, colours[s % 6], 1);
     x += 16 + 10 * static_cast<int> (sources_[s].name.size ());
   }
-  bool written = false;
-  try
-  {
-    written = cv::imwrite (path, image);
-  }
-  catch (const cv::Exception &e)
-  {
-    throw std::runtime_error (path + ": cannot write the pose spread picture (" + e.what () + ")");
-  }
-  if (!written)
-    throw std::runtime_error (path + ": cannot write the pose spread picture");
+  return image;
 }
 }  // namespace agex

@@ -18,3 +18,7 @@ check "agex_synth: a config file's unknown setting" 1 "synth_unknown.cfg: .*no-s
 check "agex_synth: a config file of 70 KB" 1 "synth_huge.cfg: 70000 bytes, more than a config file" $S --config in/synth_huge.cfg --output out/synth_i
 check "agex_synth: a missing config file" 1 "absent.cfg: cannot read it" $S --config in/absent.cfg --output out/synth_j
 check "agex_synth: an even correlation window" 1 "kinect-window must be an odd 1-31 pixels" $S --kinect-window 4 --output out/synth_k
+# --pose-report may replace only a PNG agex wrote: a user's picture (or a pose file) stays.
+cp in/frame.png in/users_picture.png
+hash_inputs
+check "agex_synth --pose-report over a user's PNG" 1 "users_picture.png" $BIN/agex_synth --procedural-poses 5 --pose-report in/users_picture.png

@@ -8,6 +8,8 @@
 #include <agex/simulation/pose_skeleton.h>
 #include <agex/simulation/synthetic_scene.h>
 
+#include <opencv2/core.hpp>
+
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -72,9 +74,9 @@ public:
 
   /** Hand spread per source, and of all ("all") last. */
   std::vector<HandSpread> handSpread () const;
-  /** \brief Writes a front and a top view of the hands (a dot per hand, a colour per
-    * source) over the T-pose skeleton as a PNG. \throws std::runtime_error if it cannot */
-  void writeSpreadImage (const std::string &path) const;
+  /** A front and a top view of the hands (a dot per hand, a colour per source) over the
+    * T-pose skeleton (BGR); the caller writes it. */
+  cv::Mat spreadImage () const;
 
   /** Joint positions of a pose as the thinning compares them: root-relative, the pelvis
     * turned to face +Z. */

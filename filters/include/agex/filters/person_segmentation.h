@@ -70,8 +70,10 @@ enum class PersonVerdict;
   *    full resolution at the end.
   * 2. **Floor.** The plane given with setFloorPlane (n.p + d = height above the floor, as
   *    agex::FloorRemoval::getFloorPlane returns it), or else agex::FloorRemoval run on the
-  *    cells whose surface faces up (within the tilt limit and 20 degrees more), and kept
-  *    only if its inliers spread over an area (setMinFloorSpread). Points less than the
+  *    cells whose surface faces up (within the tilt limit and 20 degrees more; a few
+  *    dozen cells are enough, a far floor shows in a few rows of them), and kept only if
+  *    its inliers spread over an area (setMinFloorSpread) and at most a quarter as many
+  *    cells lie under it (level tops of a body have the body under them). Points less than the
   *    floor margin, max(floor distance, 3 noise(z)), above it are nobody's.
   * 3. **Clusters.** 8-neighbour cells are connected when their depths differ by less than
   *    a gap that grows with depth: max(min gap, slope * spacing + 3 noise(z)), where
@@ -190,6 +192,9 @@ public:
     * such as the lower edge of a torso cut off by the image has a few centimetres). */
   void setMinFloorSpread (float metres) { min_floor_spread_ = metres; }
   float getMinFloorSpread () const { return min_floor_spread_; }
+  /** Fewest upward-facing cells the floor search runs on (a floor seen only far away, 4-6 m,
+    * shows in a few rows of cells; the spread rule and the cells under the plane judge it). */
+  static constexpr int kMinFloorCells = 16;
 
   /** Focal lengths in pixels; 0 (default): estimated from the cloud. Given or estimated, a
     * focal length outside kMinFocalLength to kMaxFocalLength (agex/common/focal_length.h; a

@@ -137,11 +137,19 @@ personDepthGap (float z, float spacing_per_metre, float slope, float noise, floa
   return std::max (min_gap, slope * spacing_per_metre * z + 3.f * noise * z * z);
 }
 
-/** How far the floor's inliers spread on it: the smaller standard deviation of their
-  * positions in the plane (a strip, such as a body's lower edge cut by the image, has
-  * almost none). */
-template <typename PointT> float
-floorSpread (const pcl::PointCloud<PointT> &cloud, const pcl::Indices &indices, const Eigen::Vector4f &plane,
+/** What a plane found among the cells looks like from all of them: how far its inliers
+  * spread on it (the smaller standard deviation of their positions in the plane: a strip,
+  * such as a body's lower edge cut by the image, has almost none), how many cells lie on it
+  * and how many under it. */
+struct FloorExtent
+{
+  float spread = 0.f;  ///< metres
+  int inliers = 0;     ///< cells within the distance of the plane
+  int below = 0;       ///< cells below it by more than the floor search's limit
+};
+
+template <typename PointT> FloorExtent
+floorExtent (const pcl::PointCloud<PointT> &cloud, const pcl::Indices &indices, const Eigen::Vector4f &plane,
              float distance)
 {
   const Eigen::Vector3f normal = plane.head<3> ();
@@ -152,23 +160,28 @@ floorSpread (const pcl::PointCloud<PointT> &cloud, const pcl::Indices &indices, 
   const Eigen::Vector3f b = normal.cross (a);
   Eigen::Vector2d sum = Eigen::Vector2d::Zero ();
   Eigen::Matrix2d products = Eigen::Matrix2d::Zero ();
-  int count = 0;
+  FloorExtent extent;
+  // agex::FloorRemoval's limit for "under the plane".
+  const float below_limit = -std::max (0.10f, 3.f * distance);
   for (const auto i : indices)
   {
     const Eigen::Vector3f p = cloud[i].getVector3fMap ();
-    if (std::abs (normal.dot (p) + plane[3]) >= distance)
+    const float h = normal.dot (p) + plane[3];
+    extent.below += h < below_limit;
+    if (std::abs (h) >= distance)
       continue;
     const Eigen::Vector2d q (a.dot (p), b.dot (p));
     sum += q;
     products += q * q.transpose ();
-    ++count;
+    ++extent.inliers;
   }
-  if (count < 3)
-    return 0.f;
-  const Eigen::Vector2d mean = sum / count;
-  const Eigen::Matrix2d covariance = products / count - mean * mean.transpose ();
+  if (extent.inliers < 3)
+    return extent;
+  const Eigen::Vector2d mean = sum / extent.inliers;
+  const Eigen::Matrix2d covariance = products / extent.inliers - mean * mean.transpose ();
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> solver (covariance, Eigen::EigenvaluesOnly);
-  return static_cast<float> (std::sqrt (std::max (0.0, solver.eigenvalues ()[0])));
+  extent.spread = static_cast<float> (std::sqrt (std::max (0.0, solver.eigenvalues ()[0])));
+  return extent;
 }
 
 /** The bin of value in n bins of size bin from lo, clamped to [0, n): a coordinate far from
@@ -620,10 +633,21 @@ agex::PersonSegmentation<PointT>::findFloor (detail::PersonScan &scan)
   floor.setDistanceThreshold (floor_distance_);
   // About 2,000 points: plenty for a plane, and RANSAC's cost grows with them.
   floor.setSampleStride (std::max (1, static_cast<int> (level->size () / 2000)));
+  // The floor far away may be seen in a few rows of cells only (a person at 4-6 m, a
+  // camera low or tilted up): a few cells are enough for a plane, and the rules below,
+  // judged on all cells, tell a floor from level bits of a body or of furniture.
+  floor.setMinInliers (kMinFloorCells);
   pcl::Indices above;
   floor.filter (above);
-  floor_found_ = floor.getFloorFound () && detail::floorSpread (*input_, scan.cell_pixels, floor.getFloorPlane (),
-                                                                 floor_distance_) >= min_floor_spread_;
+  if (floor.getFloorFound ())
+  {
+    // FloorRemoval looks under a plane among its upward-facing sample only; nothing of the
+    // frame may lie under a floor (the upright body under the level top of a shoulder or
+    // forearm does).
+    const detail::FloorExtent extent =
+        detail::floorExtent (*input_, scan.cell_pixels, floor.getFloorPlane (), floor_distance_);
+    floor_found_ = extent.spread >= min_floor_spread_ && 4 * extent.below <= extent.inliers;
+  }
   if (floor_found_)
     floor_plane_ = floor.getFloorPlane ();
 }

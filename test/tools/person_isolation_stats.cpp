@@ -1,0 +1,454 @@
+// person_isolation_stats: how agex::PersonSegmentation does on real frames moved away from the
+// camera (doc/pipeline.md, "People"). A developer's measuring tool, built with the tests.
+//   person_isolation_stats bonn SHARED_DATA [SEQUENCES [SHIFTS]] [--pipeline]
+//       Bonn keyframes of SEQUENCES (default "7,8"), every finite point moved by (dx, 0, dz)
+//       for each "dz:dx" of SHIFTS (default "0:0,1:0,1.5:0,2:0,1:-0.6,1:0.6,2:-0.6,2:0.6"),
+//       re-projected with the Kinect intrinsics the data documents (fx = fy = 525,
+//       cx = 319.5, cy = 239.5) and z-buffered into a frame of the same size (each point
+//       splatted over the pixels its own pixel covers there, nearest depth wins). Per shift and
+//       view (640x480 and the 144x176 portrait view): frames with the person found, person
+//       pixels against the native count scaled by (z0 / z1)^2 and against the native person's
+//       pixels carried along, precision, other persons found, and the labelled head, hand and
+//       foot tips with a person pixel within 5 cm. --pipeline adds the foot tips left after
+//       each stage of agex::DepthPipeline (640x480).
+//   person_isolation_stats kinect SHARED_DATA
+//       five_people.pcd and Skeltrack's frames: persons, their columns, depths and pixels.
+#include <agex/detection/depth_pipeline.h>
+#include <agex/filters/person_segmentation.h>
+#include <agex/io/bonn.h>
+#include <agex/io/frame_io.h>
+
+#include <opencv2/imgcodecs.hpp>
+
+#include <pcl/point_cloud.h>
+#include <pcl/point_types.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <iostream>
+#include <limits>
+#include <map>
+#include <set>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace
+{
+using Cloud = pcl::PointCloud<pcl::PointXYZ>;
+
+std::vector<std::string>
+splitList (const std::string &text)
+{
+  std::vector<std::string> out;
+  std::stringstream s (text);
+  std::string item;
+  while (std::getline (s, item, ','))
+    if (!item.empty ())
+      out.push_back (item);
+  return out;
+}
+
+Cloud::Ptr
+nanCloud (int width, int height)
+{
+  Cloud::Ptr c (new Cloud);
+  const float nan = std::numeric_limits<float>::quiet_NaN ();
+  c->points.assign (static_cast<std::size_t> (width) * height, pcl::PointXYZ (nan, nan, nan));
+  c->width = width;
+  c->height = height;
+  c->is_dense = false;
+  return c;
+}
+
+/** Every finite point moved by (dx, 0, dz), projected with K and z-buffered; tag carried along. */
+void
+moveFrame (const Cloud &in, const std::vector<unsigned char> &tag, float dx, float dz, const agex::CameraIntrinsics &K,
+           Cloud::Ptr &out, std::vector<unsigned char> &out_tag)
+{
+  const int w = static_cast<int> (in.width), h = static_cast<int> (in.height);
+  out = nanCloud (w, h);
+  out_tag.assign (in.size (), 0);
+  std::vector<float> zbuf (in.size (), std::numeric_limits<float>::infinity ());
+  for (std::size_t i = 0; i < in.size (); ++i)
+  {
+    const pcl::PointXYZ &p = in[i];
+    if (!std::isfinite (p.z))
+      continue;
+    const float x = p.x + dx, y = p.y, z = p.z + dz;
+    if (!(z > 0.1f))
+      continue;
+    const double u = K.fx * x / z + K.cx, v = K.fy * y / z + K.cy;
+    // The source pixel's footprint at the new depth (at least one pixel).
+    const int s = std::max (1, std::min (4, static_cast<int> (std::ceil (p.z / z - 1e-3))));
+    const int u0 = static_cast<int> (std::lround (u - 0.5 * (s - 1))), v0 = static_cast<int> (std::lround (v - 0.5 * (s - 1)));
+    for (int tv = v0; tv < v0 + s; ++tv)
+      for (int tu = u0; tu < u0 + s; ++tu)
+      {
+        if (tu < 0 || tu >= w || tv < 0 || tv >= h)
+          continue;
+        const int j = tv * w + tu;
+        if (z >= zbuf[j])
+          continue;
+        zbuf[j] = z;
+        (*out)[j] = pcl::PointXYZ (static_cast<float> ((tu - K.cx) * z / K.fx), static_cast<float> ((tv - K.cy) * z / K.fy), z);
+        out_tag[j] = tag[i];
+      }
+  }
+}
+
+/** Whether a pixel with mask set lies within radius metres of point (searched around its projection). */
+bool
+nearMasked (const Cloud &cloud, const std::vector<unsigned char> &mask, const Eigen::Vector3f &point,
+            const agex::CameraIntrinsics &K, float radius)
+{
+  if (!(point.z () > 0.1f))
+    return false;
+  const int w = static_cast<int> (cloud.width), h = static_cast<int> (cloud.height);
+  const int u = static_cast<int> (std::lround (K.fx * point.x () / point.z () + K.cx));
+  const int v = static_cast<int> (std::lround (K.fy * point.y () / point.z () + K.cy));
+  const int r = static_cast<int> (std::ceil (radius * K.fx / point.z ())) + 2;
+  for (int y = std::max (0, v - r); y <= std::min (h - 1, v + r); ++y)
+    for (int x = std::max (0, u - r); x <= std::min (w - 1, u + r); ++x)
+    {
+      const int j = y * w + x;
+      if (mask[j] && std::isfinite (cloud[j].z) && (cloud[j].getVector3fMap () - point).norm () <= radius)
+        return true;
+    }
+  return false;
+}
+
+struct Tip
+{
+  agex::BodyPart part;
+  Eigen::Vector3f point;
+};
+
+/** Sums over the frames of one shift and view. */
+struct Tally
+{
+  int frames = 0, found = 0, extra = 0;
+  double ratio_scaled = 0, ratio_carried = 0, precision = 0;
+  int matched = 0;
+  std::map<agex::BodyPart, std::pair<int, int>> tips;  ///< (with a person pixel, all)
+  std::map<std::string, std::pair<int, int>> stage_feet;  ///< pipeline stage -> (kept, all)
+};
+
+struct Result
+{
+  int persons = 0;
+  std::vector<unsigned char> person;  ///< any person
+  std::vector<unsigned char> best;    ///< the person overlapping the carried mask most
+  int best_count = 0, best_overlap = 0;
+};
+
+Result
+isolate (const Cloud::Ptr &cloud, const std::vector<unsigned char> &carried)
+{
+  agex::PersonSegmentation<pcl::PointXYZ> seg;
+  seg.setInputCloud (cloud);
+  std::vector<pcl::PointIndices> persons;
+  seg.segment (persons);
+  Result r;
+  r.persons = static_cast<int> (persons.size ());
+  r.person.assign (cloud->size (), 0);
+  r.best.assign (cloud->size (), 0);
+  int best = -1;
+  for (int k = 0; k < r.persons; ++k)
+  {
+    int overlap = 0;
+    for (const auto i : persons[k].indices)
+    {
+      r.person[i] = 1;
+      overlap += carried[i];
+    }
+    if (overlap > r.best_overlap)
+    {
+      r.best_overlap = overlap;
+      best = k;
+    }
+  }
+  if (best >= 0)
+  {
+    for (const auto i : persons[best].indices)
+      r.best[i] = 1;
+    r.best_count = static_cast<int> (persons[best].indices.size ());
+  }
+  return r;
+}
+
+const char *
+partName (agex::BodyPart p)
+{
+  return p == agex::BodyPart::Head ? "head" : p == agex::BodyPart::Hand ? "hand" : "foot";
+}
+
+int
+runBonn (const std::string &shared, const std::vector<std::string> &sequences, const std::vector<std::string> &shifts,
+         bool pipeline)
+{
+  const std::vector<agex::BonnLabel> labels = agex::readBonnLabels (shared + "/bonn/labels.csv");
+  std::vector<std::pair<std::string, std::string>> keyframes;
+  for (const auto &l : labels)
+    if (l.keyframe && std::find (sequences.begin (), sequences.end (), l.sequence) != sequences.end () &&
+        std::find (keyframes.begin (), keyframes.end (), std::make_pair (l.sequence, l.frame)) == keyframes.end ())
+      keyframes.emplace_back (l.sequence, l.frame);
+  const agex::CameraIntrinsics K;  // the data's documented Kinect intrinsics
+  const agex::FrameView view = agex::bonnPortraitView ();
+  const agex::CameraIntrinsics Kp = view.intrinsics (K);
+  std::vector<std::pair<float, float>> moves;
+  for (const auto &s : shifts)
+  {
+    const auto colon = s.find (':');
+    moves.emplace_back (std::stof (s.substr (0, colon)), colon == std::string::npos ? 0.f : std::stof (s.substr (colon + 1)));
+  }
+  std::map<std::pair<std::size_t, int>, Tally> tallies;  // (shift, view 0 full / 1 portrait)
+  for (const auto &kf : keyframes)
+  {
+    const agex::Frame frame = agex::loadFrame (shared + "/bonn/depth/" + kf.first + "/" + kf.second + ".png");
+    const Cloud::Ptr native = frame.cloud;
+    std::vector<Tip> tips;
+    for (const auto &l : labels)
+    {
+      if (l.sequence != kf.first || l.frame != kf.second)
+        continue;
+      Eigen::Vector3f p;
+      if (agex::liftPixelToSurface (*native, l.tip_px.x (), l.tip_px.y (), 6, 0.05f, p))
+        tips.push_back ({l.part, p});
+    }
+    const std::vector<unsigned char> all (native->size (), 1);
+    const Result base = isolate (native, all);
+    // The native person: the largest found (Bonn shows one), its median depth.
+    std::vector<unsigned char> native_person = base.best;
+    std::vector<float> depths;
+    for (std::size_t i = 0; i < native->size (); ++i)
+      if (native_person[i])
+        depths.push_back ((*native)[i].z);
+    if (depths.empty ())
+    {
+      std::cout << kf.first << "_" << kf.second << ": no person at the native distance\n";
+      continue;
+    }
+    std::nth_element (depths.begin (), depths.begin () + depths.size () / 2, depths.end ());
+    const float z0 = depths[depths.size () / 2];
+    // Native counts per view (portrait: the view of the native frame).
+    Cloud native_portrait;
+    agex::applyView (*native, view, native_portrait);
+    int native_full = base.best_count, native_view = 0;
+    {
+      Cloud::Ptr np (new Cloud (native_portrait));
+      std::vector<unsigned char> carried (np->size (), 0);
+      for (int v = 0; v < view.outputHeight (); ++v)
+        for (int u = 0; u < view.outputWidth (); ++u)
+        {
+          const cv::Point s = view.sourcePixel (u, v);
+          carried[v * view.outputWidth () + u] = native_person[s.y * native->width + s.x];
+        }
+      native_view = isolate (np, carried).best_count;
+    }
+    for (std::size_t m = 0; m < moves.size (); ++m)
+    {
+      const float dz = moves[m].first, dx = moves[m].second;
+      Cloud::Ptr moved;
+      std::vector<unsigned char> carried;
+      moveFrame (*native, native_person, dx, dz, K, moved, carried);
+      for (int vw = 0; vw < 2; ++vw)
+      {
+        Cloud::Ptr cloud = moved;
+        std::vector<unsigned char> tag = carried;
+        const agex::CameraIntrinsics &Kv = vw == 0 ? K : Kp;
+        if (vw == 1)
+        {
+          cloud.reset (new Cloud);
+          agex::applyView (*moved, view, *cloud);
+          tag.assign (cloud->size (), 0);
+          for (int v = 0; v < view.outputHeight (); ++v)
+            for (int u = 0; u < view.outputWidth (); ++u)
+            {
+              const cv::Point s = view.sourcePixel (u, v);
+              tag[v * view.outputWidth () + u] = carried[s.y * moved->width + s.x];
+            }
+        }
+        const Result r = isolate (cloud, tag);
+        if (const char *dump = std::getenv ("AGEX_DUMP"))
+          if (kf.first + "_" + kf.second == std::getenv ("AGEX_DUMP_FRAME"))
+          {
+            // Depth grey (brighter = nearer), persons red, the carried person's outline green.
+            cv::Mat img (cloud->height, cloud->width, CV_8UC3, cv::Scalar (0, 0, 0));
+            for (int j = 0; j < static_cast<int> (cloud->size ()); ++j)
+            {
+              const float z = (*cloud)[j].z;
+              if (!std::isfinite (z))
+                continue;
+              const auto g = static_cast<unsigned char> (std::max (0.f, std::min (255.f, 255.f - 40.f * z)));
+              cv::Vec3b &px = img.at<cv::Vec3b> (j / cloud->width, j % cloud->width);
+              px = cv::Vec3b (g, g, g);
+              if (r.person[j])
+                px = cv::Vec3b (g / 3, g / 3, 255);
+              if (tag[j] && !r.person[j])
+                px = cv::Vec3b (0, 200, 0);
+            }
+            char name[256];
+            std::snprintf (name, sizeof name, "%s_%.1f_%.1f_%d.png", dump, dz, dx, vw);
+            cv::imwrite (name, img);
+          }
+        Tally &t = tallies[{m, vw}];
+        ++t.frames;
+        const int carried_count = static_cast<int> (std::count (tag.begin (), tag.end (), 1));
+        const bool found = r.best_count > 0 && r.best_overlap > 0.5 * r.best_count;
+        t.found += found;
+        t.extra += r.persons - (found ? 1 : 0);
+        if (found)
+        {
+          const double scale = (z0 / (z0 + dz)) * (z0 / (z0 + dz));
+          t.ratio_scaled += r.best_count / ((vw == 0 ? native_full : native_view) * scale);
+          t.ratio_carried += static_cast<double> (r.best_count) / std::max (1, carried_count);
+          t.precision += static_cast<double> (r.best_overlap) / r.best_count;
+          ++t.matched;
+        }
+        for (const auto &tip : tips)
+        {
+          const Eigen::Vector3f q = tip.point + Eigen::Vector3f (dx, 0.f, dz);
+          auto &c = t.tips[tip.part];
+          ++c.second;
+          c.first += nearMasked (*cloud, r.person, q, Kv, 0.05f);
+        }
+        if (!pipeline || vw != 0)
+          continue;
+        // Foot tips after each stage: the data, isolation, then the pipeline with the
+        // cleaning stages switched on one by one.
+        auto feet = [&] (const std::string &stage, const std::vector<unsigned char> &mask, const Cloud &c) {
+          auto &s = t.stage_feet[stage];
+          for (const auto &tip : tips)
+            if (tip.part == agex::BodyPart::Foot)
+            {
+              ++s.second;
+              s.first += nearMasked (c, mask, tip.point + Eigen::Vector3f (dx, 0.f, dz), K, 0.05f);
+            }
+        };
+        feet ("0 data", all, *cloud);
+        feet ("1 isolation", r.person, *cloud);
+        struct Variant
+        {
+          const char *name;
+          bool mixed, median, spurs;
+        };
+        for (const Variant &var : {Variant{"2 +mixed", true, false, false}, Variant{"3 +mixed+median", true, true, false},
+                                   Variant{"4 +all (meshes)", true, true, true}})
+        {
+          agex::DepthPipelineParams params;
+          params.remove_mixed_pixels = var.mixed;
+          params.median_window = var.median ? 3 : 1;
+          if (!var.spurs)
+            params.spur_iterations = 0;
+          agex::DepthPipeline<pcl::PointXYZ> pipe (params);
+          pipe.setInputCloud (cloud);
+          agex::DepthPipelineResult result;
+          pipe.compute (result);
+          std::vector<unsigned char> mask (cloud->size (), 0);
+          for (const auto i : result.meshIndices ())
+            mask[i] = 1;
+          feet (var.name, mask, *result.filtered);
+        }
+      }
+    }
+  }
+  for (const auto &entry : tallies)
+  {
+    const Tally &t = entry.second;
+    const auto &mv = moves[entry.first.first];
+    std::printf ("dz %+.1f dx %+.1f %s: found %d/%d, extra %d, pixels/scaled %.2f, pixels/carried %.2f, precision %.3f",
+                 mv.first, mv.second, entry.first.second ? "144x176" : "640x480", t.found, t.frames, t.extra,
+                 t.matched ? t.ratio_scaled / t.matched : 0.0, t.matched ? t.ratio_carried / t.matched : 0.0,
+                 t.matched ? t.precision / t.matched : 0.0);
+    int all_in = 0, all_n = 0;
+    for (const auto &tip : t.tips)
+    {
+      std::printf (", %s %d/%d", partName (tip.first), tip.second.first, tip.second.second);
+      all_in += tip.second.first;
+      all_n += tip.second.second;
+    }
+    std::printf (", tips %.3f\n", all_n ? static_cast<double> (all_in) / all_n : 0.0);
+    for (const auto &s : t.stage_feet)
+      std::printf ("    feet %-18s %d/%d\n", s.first.c_str (), s.second.first, s.second.second);
+  }
+  return 0;
+}
+
+int
+runKinect (const std::string &shared)
+{
+  {
+    const agex::Frame frame = agex::loadFrame (shared + "/kinect/five_people.pcd");
+    agex::PersonSegmentation<pcl::PointXYZ> seg;
+    seg.setInputCloud (frame.cloud);
+    std::vector<pcl::PointIndices> persons;
+    seg.segment (persons);
+    std::printf ("five_people: %zu persons, floor %d\n", persons.size (), seg.getFloorFound ());
+    for (std::size_t k = 0; k < persons.size (); ++k)
+    {
+      double col = 0;
+      for (const auto i : persons[k].indices)
+        col += i % frame.cloud->width;
+      const agex::PersonInfo &info = seg.getPersons ()[k];
+      std::printf ("  column %.0f, %.2f m, top %.2f, bottom %.2f, %d pixels\n", col / persons[k].indices.size (),
+                   info.distance, info.top, info.bottom, info.points);
+    }
+  }
+  for (const char *name : {"depth-data-1028894671", "depth-data-1045879925", "depth-data-1058893191",
+                           "depth-data-1070905432", "depth-data-1166565565", "depth-data-1399145206"})
+  {
+    const agex::Frame frame = agex::loadFrame (shared + "/kinect/skeltrack/" + name + ".u16");
+    agex::PersonSegmentation<pcl::PointXYZ> seg;
+    seg.setInputCloud (frame.cloud);
+    std::vector<pcl::PointIndices> persons;
+    seg.segment (persons);
+    std::size_t finite = 0, taken = 0;
+    for (const auto &p : *frame.cloud)
+      finite += std::isfinite (p.z);
+    std::printf ("%s: %zu persons, floor %d,", name, persons.size (), seg.getFloorFound ());
+    for (std::size_t k = 0; k < persons.size (); ++k)
+    {
+      taken += persons[k].indices.size ();
+      std::printf (" %.2f m %d px;", seg.getPersons ()[k].distance, seg.getPersons ()[k].points);
+    }
+    std::printf (" %.3f of the valid pixels\n", static_cast<double> (taken) / finite);
+  }
+  return 0;
+}
+}  // namespace
+
+int
+main (int argc, char **argv)
+{
+  if (argc < 3)
+  {
+    std::cerr << "usage: person_isolation_stats bonn SHARED_DATA [SEQUENCES [SHIFTS]] [--pipeline]\n"
+                 "       person_isolation_stats kinect SHARED_DATA\n";
+    return 2;
+  }
+  try
+  {
+    const std::string mode = argv[1], shared = argv[2];
+    if (mode == "kinect")
+      return runKinect (shared);
+    std::vector<std::string> rest;
+    bool pipeline = false;
+    for (int a = 3; a < argc; ++a)
+      if (std::string (argv[a]) == "--pipeline")
+        pipeline = true;
+      else
+        rest.emplace_back (argv[a]);
+    const std::vector<std::string> sequences = splitList (rest.size () > 0 ? rest[0] : "7,8");
+    const std::vector<std::string> shifts =
+        splitList (rest.size () > 1 ? rest[1] : "0:0,1:0,1.5:0,2:0,1:-0.6,1:0.6,2:-0.6,2:0.6");
+    return runBonn (shared, sequences, shifts, pipeline);
+  }
+  catch (const std::exception &e)
+  {
+    std::cerr << "person_isolation_stats: " << e.what () << "\n";
+    return 1;
+  }
+}

@@ -1,7 +1,7 @@
 // person_isolation_stats: how agex::PersonSegmentation does on real frames moved away from the
 // camera (doc/pipeline.md, "People"). A developer's measuring tool, built with the tests.
 //   person_isolation_stats bonn SHARED_DATA [SEQUENCES [SHIFTS]] [--pipeline]
-//       Bonn keyframes of SEQUENCES (default "7,8"), every finite point moved by (dx, 0, dz)
+//       Bonn keyframes of SEQUENCES (default "7,8"; "5_025" is one keyframe), every finite point moved by (dx, 0, dz)
 //       for each "dz:dx" of SHIFTS (default "0:0,1:0,1.5:0,2:0,1:-0.6,1:0.6,2:-0.6,2:0.6"),
 //       re-projected with the Kinect intrinsics the data documents (fx = fy = 525,
 //       cx = 319.5, cy = 239.5) and z-buffered into a frame of the same size (each point
@@ -132,6 +132,8 @@ struct Tally
   int frames = 0, found = 0, extra = 0;
   double ratio_scaled = 0, ratio_carried = 0, precision = 0;
   int matched = 0;
+  double worst = 1e9;  ///< smallest pixels/carried of a frame
+  std::string worst_frame;
   std::map<agex::BodyPart, std::pair<int, int>> tips;  ///< (with a person pixel, all)
   std::map<std::string, std::pair<int, int>> stage_feet;  ///< pipeline stage -> (kept, all)
 };
@@ -192,7 +194,9 @@ runBonn (const std::string &shared, const std::vector<std::string> &sequences, c
   const std::vector<agex::BonnLabel> labels = agex::readBonnLabels (shared + "/bonn/labels.csv");
   std::vector<std::pair<std::string, std::string>> keyframes;
   for (const auto &l : labels)
-    if (l.keyframe && std::find (sequences.begin (), sequences.end (), l.sequence) != sequences.end () &&
+    if (l.keyframe &&
+        (std::find (sequences.begin (), sequences.end (), l.sequence) != sequences.end () ||
+         std::find (sequences.begin (), sequences.end (), l.sequence + "_" + l.frame) != sequences.end ()) &&
         std::find (keyframes.begin (), keyframes.end (), std::make_pair (l.sequence, l.frame)) == keyframes.end ())
       keyframes.emplace_back (l.sequence, l.frame);
   const agex::CameraIntrinsics K;  // the data's documented Kinect intrinsics
@@ -299,12 +303,21 @@ runBonn (const std::string &shared, const std::vector<std::string> &sequences, c
         const int carried_count = static_cast<int> (std::count (tag.begin (), tag.end (), 1));
         const bool found = r.best_count > 0 && r.best_overlap > 0.5 * r.best_count;
         t.found += found;
+        if (!found)
+          std::printf ("missed: %s_%s dz %+.1f dx %+.1f view %d (%d persons)\n", kf.first.c_str (), kf.second.c_str (), dz, dx,
+                       vw, r.persons);
         t.extra += r.persons - (found ? 1 : 0);
         if (found)
         {
           const double scale = (z0 / (z0 + dz)) * (z0 / (z0 + dz));
           t.ratio_scaled += r.best_count / ((vw == 0 ? native_full : native_view) * scale);
-          t.ratio_carried += static_cast<double> (r.best_count) / std::max (1, carried_count);
+          const double carried_ratio = static_cast<double> (r.best_count) / std::max (1, carried_count);
+          t.ratio_carried += carried_ratio;
+          if (carried_ratio < t.worst)
+          {
+            t.worst = carried_ratio;
+            t.worst_frame = kf.first + "_" + kf.second;
+          }
           t.precision += static_cast<double> (r.best_overlap) / r.best_count;
           ++t.matched;
         }
@@ -370,7 +383,10 @@ runBonn (const std::string &shared, const std::vector<std::string> &sequences, c
       all_in += tip.second.first;
       all_n += tip.second.second;
     }
-    std::printf (", tips %.3f\n", all_n ? static_cast<double> (all_in) / all_n : 0.0);
+    std::printf (", tips %.3f", all_n ? static_cast<double> (all_in) / all_n : 0.0);
+    if (t.matched)
+      std::printf (", worst pixels/carried %.2f (%s)", t.worst, t.worst_frame.c_str ());
+    std::printf ("\n");
     for (const auto &s : t.stage_feet)
       std::printf ("    feet %-18s %d/%d\n", s.first.c_str (), s.second.first, s.second.second);
   }

@@ -74,7 +74,9 @@ enum class PersonVerdict;
   *    dozen cells are enough, a far floor shows in a few rows of them), and kept only if
   *    its inliers spread over an area (setMinFloorSpread) and at most a quarter as many
   *    cells lie under it (level tops of a body have the body under them). Points less than the
-  *    floor margin, max(floor distance, 3 noise(z)), above it are nobody's.
+  *    floor margin, max(floor distance, 3 noise(z) H / z), above it are nobody's: a depth
+  *    error moves a point along its viewing ray, which changes the height of a point H below
+  *    the camera by H / z of it.
   * 3. **Clusters.** 8-neighbour cells are connected when their depths differ by less than
   *    a gap that grows with depth: max(min gap, slope * spacing + 3 noise(z)), where
   *    spacing = step z / f is the distance between the cells on a surface facing the
@@ -184,7 +186,8 @@ public:
   void setFloorMaxTilt (float degrees) { floor_max_tilt_deg_ = degrees; }
   float getFloorMaxTilt () const { return floor_max_tilt_deg_; }
   /** Floor inlier distance for the search, and the least floor margin: points lower than
-    * max(this, 3 noise(z)) above the floor belong to nobody (default 0.04 m). */
+    * max(this, 3 noise(z) H / z) above the floor, H their depth below the camera, belong to
+    * nobody (default 0.04 m). */
   void setFloorDistance (float metres) { floor_distance_ = metres; }
   float getFloorDistance () const { return floor_distance_; }
   /** A plane found is the floor only if its inliers spread over an area: the smaller
@@ -254,8 +257,9 @@ public:
   /** Least visible area, square metres (default 0.12: a head and shoulders). */
   void setMinArea (float square_metres) { min_area_ = square_metres; }
   float getMinArea () const { return min_area_; }
-  /** The narrow-top rule: the crown, the cells within drop metres (plus twice the depth
-    * noise) of the top, spans across the view without a gap at most ratio times the width
+  /** The narrow-top rule: the crown, the cells within drop metres (plus twice the height
+    * noise there, the depth noise times the top's height above the camera over its depth) of
+    * the top, spans across the view without a gap at most ratio times the width
     * of the upright parts across the view (defaults 0.05 m and 0.75). A head is narrower
     * than the shoulders and hips below it (with hands on it too, 0.45 m against 0.65 m;
     * raised hands count each on their own; seen from the side, the head's 0.2 m against the
@@ -377,7 +381,7 @@ private:
                          const detail::PersonPixels &pixels) const;
 
   // The rules the steps share: connection, statistics and the verdict on a set of parts.
-  float floorMargin (float z) const;
+  float floorMargin (const detail::PersonScan &scan, float z, float h) const;
   bool connected (const detail::PersonScan &scan, const detail::PersonGridCell &a, const detail::PersonGridCell &b,
                   bool diagonal) const;
   void measure (const detail::PersonScan &scan, const std::vector<detail::PersonPart> &parts,

@@ -137,6 +137,16 @@ personDepthGap (float z, float spacing_per_metre, float slope, float noise, floa
   return std::max (min_gap, slope * spacing_per_metre * z + 3.f * noise * z * z);
 }
 
+/** The noise of a height measured at depth z, rel metres above or below the camera along
+  * the up axis: depth noise moves a point along its viewing ray, which changes its height by
+  * rel / z of the depth error (a floor 1 m below the camera seen 4 m away: a quarter of it;
+  * the top of a head near the camera's height: almost nothing). */
+inline float
+heightNoise (float noise, float z, float rel)
+{
+  return noise * z * std::abs (rel);  // noise(z) = noise z^2, times rel / z
+}
+
 /** What a plane found among the cells looks like from all of them: how far its inliers
   * spread on it (the smaller standard deviation of their positions in the plane: a strip,
   * such as a body's lower edge cut by the image, has almost none), how many cells lie on it
@@ -475,9 +485,9 @@ agex::PersonSegmentation<PointT>::usable (const detail::PersonScan &scan, int i)
 }
 
 template <typename PointT> float
-agex::PersonSegmentation<PointT>::floorMargin (float z) const
+agex::PersonSegmentation<PointT>::floorMargin (const detail::PersonScan &scan, float z, float h) const
 {
-  return std::max (floor_distance_, 3.f * depth_noise_ * z * z);
+  return std::max (floor_distance_, 3.f * detail::heightNoise (depth_noise_, z, h - scan.offset));
 }
 
 template <typename PointT> bool
@@ -690,7 +700,7 @@ agex::PersonSegmentation<PointT>::placeCells (detail::PersonScan &scan) const
     cell.h = normal.dot (xyz) + offset;
     cell.lat = lateral.dot (xyz);
     cell.fwd = forward.dot (xyz);
-    cell.valid = !scan.with_floor || cell.h >= floorMargin (p.z);
+    cell.valid = !scan.with_floor || cell.h >= floorMargin (scan, p.z, cell.h);
   }
 }
 
@@ -786,7 +796,7 @@ agex::PersonSegmentation<PointT>::measureBins (const detail::PersonScan &scan,
   s.column.assign (nlat, 0);
   std::vector<int> column_first (nlat, scan.cw), column_last (nlat, -1);
   const float base_band = 0.1f;
-  const float crown_drop = crown_drop_ + 2.f * depth_noise_ * s.zMean () * s.zMean ();
+  const float crown_drop = crown_drop_ + 2.f * detail::heightNoise (depth_noise_, s.zMean (), s.top - scan.offset);
   detail::forEachPartCell (scan, parts, [&] (const detail::PersonPart &part, int c, const detail::PersonGridCell &g) {
     const int bl = detail::binIndex (g.lat, s.lat_min, s.bin, nlat);
     const int bf = detail::binIndex (g.fwd, s.fwd_min, s.bin, nfwd);
@@ -1345,8 +1355,12 @@ agex::PersonSegmentation<PointT>::personPixels (const detail::PersonScan &scan,
           if (!(p.z >= lo && p.z <= hi) || labels[i].label != kUnlabelled || !std::isfinite (p.x + p.y) ||
               !(fake_indices_ || scan.selected[i]) || !(p.z > 0.f))
             continue;
-          if (scan.with_floor && scan.normal.dot (p.getVector3fMap ()) + scan.offset < floorMargin (p.z))
-            continue;
+          if (scan.with_floor)
+          {
+            const float h = scan.normal.dot (p.getVector3fMap ()) + scan.offset;
+            if (h < floorMargin (scan, p.z, h))
+              continue;
+          }
           if (bounded)
           {
             const float lat = scan.lateral.dot (p.getVector3fMap ());

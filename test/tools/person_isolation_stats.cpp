@@ -19,6 +19,7 @@
 #include <agex/io/frame_io.h>
 
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include <pcl/point_cloud.h>
 #include <pcl/point_types.h>
@@ -130,6 +131,7 @@ struct Tip
 struct Tally
 {
   int frames = 0, found = 0, extra = 0;
+  long low = 0;
   double ratio_scaled = 0, ratio_carried = 0, precision = 0;
   int matched = 0;
   double worst = 1e9;  ///< smallest pixels/carried of a frame
@@ -144,6 +146,8 @@ struct Result
   std::vector<unsigned char> person;  ///< any person
   std::vector<unsigned char> best;    ///< the person overlapping the carried mask most
   int best_count = 0, best_overlap = 0;
+  int low = 0;  ///< person pixels less than 4 cm above the floor (the feet's lowest, or floor)
+  Eigen::Vector4f plane = Eigen::Vector4f::Zero ();
 };
 
 Result
@@ -171,6 +175,12 @@ isolate (const Cloud::Ptr &cloud, const std::vector<unsigned char> &carried)
       r.best_overlap = overlap;
       best = k;
     }
+  }
+  if (seg.getFloorFound ())
+  {
+    const Eigen::Vector4f plane = r.plane = seg.getFloorPlane ();
+    for (std::size_t i = 0; i < cloud->size (); ++i)
+      r.low += r.person[i] && plane.head<3> ().dot ((*cloud)[i].getVector3fMap ()) + plane[3] < 0.04f;
   }
   if (best >= 0)
   {
@@ -290,12 +300,21 @@ runBonn (const std::string &shared, const std::vector<std::string> &sequences, c
               cv::Vec3b &px = img.at<cv::Vec3b> (j / cloud->width, j % cloud->width);
               px = cv::Vec3b (g, g, g);
               if (r.person[j])
-                px = cv::Vec3b (g / 3, g / 3, 255);
+                px = r.plane.head<3> ().dot ((*cloud)[j].getVector3fMap ()) + r.plane[3] < 0.04f
+                         ? cv::Vec3b (255, 0, 0)
+                         : cv::Vec3b (g / 3, g / 3, 255);
               if (tag[j] && !r.person[j])
                 px = cv::Vec3b (0, 200, 0);
             }
             char name[256];
             std::snprintf (name, sizeof name, "%s_%.1f_%.1f_%d.png", dump, dz, dx, vw);
+            if (const char *crop = std::getenv ("AGEX_DUMP_CROP"))
+            {
+              int x = 0, y = 0, cw = 0, ch = 0, zoom = 1;
+              if (std::sscanf (crop, "%d,%d,%d,%d,%d", &x, &y, &cw, &ch, &zoom) == 5)
+                cv::resize (img (cv::Rect (x, y, cw, ch) & cv::Rect (0, 0, img.cols, img.rows)), img, cv::Size (),
+                            zoom, zoom, cv::INTER_NEAREST);
+            }
             cv::imwrite (name, img);
           }
         Tally &t = tallies[{m, vw}];
@@ -307,6 +326,7 @@ runBonn (const std::string &shared, const std::vector<std::string> &sequences, c
           std::printf ("missed: %s_%s dz %+.1f dx %+.1f view %d (%d persons)\n", kf.first.c_str (), kf.second.c_str (), dz, dx,
                        vw, r.persons);
         t.extra += r.persons - (found ? 1 : 0);
+        t.low += r.low;
         if (found)
         {
           const double scale = (z0 / (z0 + dz)) * (z0 / (z0 + dz));
@@ -372,8 +392,9 @@ runBonn (const std::string &shared, const std::vector<std::string> &sequences, c
   {
     const Tally &t = entry.second;
     const auto &mv = moves[entry.first.first];
-    std::printf ("dz %+.1f dx %+.1f %s: found %d/%d, extra %d, pixels/scaled %.2f, pixels/carried %.2f, precision %.3f",
+    std::printf ("dz %+.1f dx %+.1f %s: found %d/%d, extra %d, %.0f px under 4 cm, pixels/scaled %.2f, pixels/carried %.2f, precision %.3f",
                  mv.first, mv.second, entry.first.second ? "144x176" : "640x480", t.found, t.frames, t.extra,
+                 static_cast<double> (t.low) / std::max (1, t.frames),
                  t.matched ? t.ratio_scaled / t.matched : 0.0, t.matched ? t.ratio_carried / t.matched : 0.0,
                  t.matched ? t.precision / t.matched : 0.0);
     int all_in = 0, all_n = 0;

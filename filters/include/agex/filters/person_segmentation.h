@@ -198,6 +198,10 @@ public:
   /** Fewest upward-facing cells the floor search runs on (a floor seen only far away, 4-6 m,
     * shows in a few rows of cells; the spread rule and the cells under the plane judge it). */
   static constexpr int kMinFloorCells = 16;
+  /** Below the floor margin, a person's pixels (the feet) are those above the floor under the
+    * person (the median height of the floor cells among its blocks) by at least three times
+    * their height noise and at least this, metres. */
+  static constexpr float kMinFootHeight = 0.01f;
 
   /** Focal lengths in pixels; 0 (default): estimated from the cloud. Given or estimated, a
     * focal length outside kMinFocalLength to kMaxFocalLength (agex/common/focal_length.h; a

@@ -121,6 +121,8 @@ struct PersonBlocks
   std::vector<int> stamp;  ///< the person whose blocks last included the cell
   std::vector<float> zlo, zhi;
   std::vector<int> cells;  ///< this person's blocks
+  float floor_level = 0.f;   ///< height of the floor under this person, from its floor cells
+  std::vector<float> levels;
 };
 
 /** One person's full-resolution pixels. */
@@ -290,6 +292,18 @@ inline float
 groundDistance (const PersonPartStats &a, const PersonPartStats &b)
 {
   return std::hypot (a.latMean () - b.latMean (), a.fwdMean () - b.fwdMean ());
+}
+
+/** Whether one of the three pixels above pixel i carries label (those rows are done when
+  * pixel i is looked at: the pixels are taken row by row). */
+inline bool
+belowPerson (const pcl::PointCloud<pcl::Label> &labels, int i, int width, std::uint32_t label)
+{
+  if (i < width)
+    return false;
+  const int u = i % width, above = i - width;
+  return labels[above].label == label || (u > 0 && labels[above - 1].label == label) ||
+         (u + 1 < width && labels[above + 1].label == label);
 }
 
 /** Person k's blocks: its cells and the free cells next to them (a pixel of a free block may
@@ -1310,6 +1324,24 @@ agex::PersonSegmentation<PointT>::takePixels (const detail::PersonScan &scan,
   for (int k = 0; k < static_cast<int> (people.size ()); ++k)
   {
     const bool bounded = detail::personBlocks (scan, people[k].parts, k, blocks);
+    // The floor where the person stands, from the floor cells among its blocks (the plane
+    // was fitted to the whole floor, and may be a centimetre or two off here): pixels of
+    // the feet above it by more than the height noise are the person's (doc/pipeline.md).
+    blocks.floor_level = 0.f;
+    blocks.levels.clear ();
+    if (scan.with_floor)
+      for (const int c : blocks.cells)
+      {
+        const detail::PersonGridCell &g = scan.grid[c];
+        if (g.pixel >= 0 && !g.valid && std::abs (g.h) < floorMargin (scan, g.z, g.h))
+          blocks.levels.push_back (g.h);
+      }
+    if (blocks.levels.size () >= 3)
+    {
+      const auto middle = blocks.levels.begin () + blocks.levels.size () / 2;
+      std::nth_element (blocks.levels.begin (), middle, blocks.levels.end ());
+      blocks.floor_level = *middle;
+    }
     personPixels (scan, people[k].parts, k, bounded, blocks, labels, pixels[k]);
   }
 }
@@ -1357,8 +1389,15 @@ agex::PersonSegmentation<PointT>::personPixels (const detail::PersonScan &scan,
             continue;
           if (scan.with_floor)
           {
+            // Below the floor margin only the feet: points above the floor under this
+            // person by more than three times their height noise (and a centimetre),
+            // right under a pixel of the person (the shoe goes on down from the leg; a
+            // noisy bit of the floor beside it does not).
             const float h = scan.normal.dot (p.getVector3fMap ()) + scan.offset;
-            if (h < floorMargin (scan, p.z, h))
+            if (h < floorMargin (scan, p.z, h) &&
+                (h - blocks.floor_level < std::max (kMinFootHeight,
+                                                    3.f * detail::heightNoise (depth_noise_, p.z, h - scan.offset)) ||
+                 !detail::belowPerson (labels, i, width, label)))
               continue;
           }
           if (bounded)

@@ -10,11 +10,18 @@
 //       pixels against the native count scaled by (z0 / z1)^2 and against the native person's
 //       pixels carried along, precision, other persons found, and the labelled head, hand and
 //       foot tips with a person pixel within 5 cm. --pipeline adds the foot tips left after
-//       each stage of agex::DepthPipeline (640x480).
+//       each stage of agex::DepthPipeline (640x480). --dump PREFIX KEYFRAME (e.g. 7_022)
+//       writes PREFIX_dz_dx_view.png of that keyframe: depth in grey, persons red, their
+//       pixels under 4 cm blue, the native person's pixels no one took green; --crop
+//       x,y,w,h,zoom shows a part of it enlarged.
+//   person_isolation_stats bonn-all SHARED_DATA
+//       All Bonn frames at 640x480 and 144x176: frames with exactly one person, the person's
+//       meshes against the crop box's (IoU), keyframe tips within 3 (1) pixels of the person.
 //   person_isolation_stats kinect SHARED_DATA
 //       five_people.pcd and Skeltrack's frames: persons, their columns, depths and pixels.
 #include <agex/detection/depth_pipeline.h>
 #include <agex/filters/person_segmentation.h>
+#include <agex/io/atomic_file.h>
 #include <agex/io/bonn.h>
 #include <agex/io/frame_io.h>
 
@@ -28,11 +35,14 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
+#include <iterator>
 #include <iostream>
 #include <limits>
 #include <map>
 #include <set>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -191,6 +201,14 @@ isolate (const Cloud::Ptr &cloud, const std::vector<unsigned char> &carried)
   return r;
 }
 
+/** --dump PREFIX KEYFRAME [--crop x,y,w,h,zoom]: pictures of one keyframe, moved. */
+struct Dump
+{
+  std::string prefix, keyframe;
+  cv::Rect crop;
+  int zoom = 0;  ///< 0: the whole frame
+};
+
 const char *
 partName (agex::BodyPart p)
 {
@@ -199,7 +217,7 @@ partName (agex::BodyPart p)
 
 int
 runBonn (const std::string &shared, const std::vector<std::string> &sequences, const std::vector<std::string> &shifts,
-         bool pipeline)
+         bool pipeline, const Dump &dump)
 {
   const std::vector<agex::BonnLabel> labels = agex::readBonnLabels (shared + "/bonn/labels.csv");
   std::vector<std::pair<std::string, std::string>> keyframes;
@@ -286,8 +304,7 @@ runBonn (const std::string &shared, const std::vector<std::string> &sequences, c
             }
         }
         const Result r = isolate (cloud, tag);
-        if (const char *dump = std::getenv ("AGEX_DUMP"))
-          if (kf.first + "_" + kf.second == std::getenv ("AGEX_DUMP_FRAME"))
+        if (!dump.prefix.empty () && kf.first + "_" + kf.second == dump.keyframe)
           {
             // Depth grey (brighter = nearer), persons red, the carried person's outline green.
             cv::Mat img (cloud->height, cloud->width, CV_8UC3, cv::Scalar (0, 0, 0));
@@ -307,15 +324,14 @@ runBonn (const std::string &shared, const std::vector<std::string> &sequences, c
                 px = cv::Vec3b (0, 200, 0);
             }
             char name[256];
-            std::snprintf (name, sizeof name, "%s_%.1f_%.1f_%d.png", dump, dz, dx, vw);
-            if (const char *crop = std::getenv ("AGEX_DUMP_CROP"))
-            {
-              int x = 0, y = 0, cw = 0, ch = 0, zoom = 1;
-              if (std::sscanf (crop, "%d,%d,%d,%d,%d", &x, &y, &cw, &ch, &zoom) == 5)
-                cv::resize (img (cv::Rect (x, y, cw, ch) & cv::Rect (0, 0, img.cols, img.rows)), img, cv::Size (),
-                            zoom, zoom, cv::INTER_NEAREST);
-            }
-            cv::imwrite (name, img);
+            std::snprintf (name, sizeof name, "%s_%.1f_%.1f_%d.png", dump.prefix.c_str (), dz, dx, vw);
+            const cv::Rect crop = dump.crop & cv::Rect (0, 0, img.cols, img.rows);
+            if (dump.zoom > 0 && crop.area () > 0)
+              cv::resize (img (crop), img, cv::Size (), dump.zoom, dump.zoom, cv::INTER_NEAREST);
+            std::vector<unsigned char> png;
+            if (!cv::imencode (".png", img, png))
+              throw std::runtime_error (std::string ("cannot encode the picture ") + name);
+            agex::writeFileAtomic (name, std::string (png.begin (), png.end ()));
           }
         Tally &t = tallies[{m, vw}];
         ++t.frames;
@@ -384,6 +400,24 @@ runBonn (const std::string &shared, const std::vector<std::string> &sequences, c
           for (const auto i : result.meshIndices ())
             mask[i] = 1;
           feet (var.name, mask, *result.filtered);
+          if (var.spurs)
+          {
+            // The meshes again without their least size: what the size takes.
+            agex::DepthPipelineParams all_meshes = params;
+            all_meshes.min_mesh_size = 1;
+            agex::DepthPipeline<pcl::PointXYZ> pipe_all (all_meshes);
+            pipe_all.setInputCloud (cloud);
+            agex::DepthPipelineResult every;
+            pipe_all.compute (every);
+            std::vector<unsigned char> in_mesh (cloud->size (), 0);
+            for (const auto i : every.meshIndices ())
+              in_mesh[i] = 1;
+            feet ("6 +all, any mesh size", in_mesh, *every.filtered);
+            std::vector<unsigned char> left (cloud->size (), 0);
+            for (std::size_t i = 0; i < cloud->size (); ++i)
+              left[i] = std::isfinite ((*result.filtered)[i].z);
+            feet ("5 +all (points)", left, *result.filtered);
+          }
         }
       }
     }
@@ -411,6 +445,89 @@ runBonn (const std::string &shared, const std::vector<std::string> &sequences, c
     for (const auto &s : t.stage_feet)
       std::printf ("    feet %-18s %d/%d\n", s.first.c_str (), s.second.first, s.second.second);
   }
+  return 0;
+}
+
+/** Pixels in both sets over pixels in either. */
+double
+iou (const std::vector<int> &a, const std::vector<int> &b)
+{
+  std::vector<int> x = a, y = b, both;
+  std::sort (x.begin (), x.end ());
+  std::sort (y.begin (), y.end ());
+  std::set_intersection (x.begin (), x.end (), y.begin (), y.end (), std::back_inserter (both));
+  const double either = static_cast<double> (x.size () + y.size () - both.size ());
+  return either > 0 ? both.size () / either : 1.0;
+}
+
+/** Every Bonn frame at both views: persons per frame, the person's meshes against the crop
+  * box's (the same cleaning stages), and the keyframe tips near the person's pixels (3 pixels
+  * at 640x480, 1 at 144x176), as doc/pipeline.md reports them. */
+int
+runBonnAll (const std::string &shared)
+{
+  namespace fs = std::filesystem;
+  const std::vector<agex::BonnLabel> labels = agex::readBonnLabels (shared + "/bonn/labels.csv");
+  const agex::FrameView view = agex::bonnPortraitView ();
+  int frames = 0, one[2] = {0, 0}, tips = 0, near[2] = {0, 0};
+  double iou_sum[2] = {0, 0}, iou_min[2] = {1, 1};
+  std::vector<fs::path> files;
+  for (const auto &dir : fs::directory_iterator (shared + "/bonn/depth"))
+    if (dir.is_directory ())
+      for (const auto &f : fs::directory_iterator (dir.path ()))
+        if (f.path ().extension () == ".png")
+          files.push_back (f.path ());
+  std::sort (files.begin (), files.end ());
+  for (const auto &file : files)
+  {
+    const std::string sequence = file.parent_path ().filename ().string (), name = file.stem ().string ();
+    const agex::Frame frame = agex::loadFrame (file.string ());
+    Cloud::Ptr portrait (new Cloud);
+    agex::applyView (*frame.cloud, view, *portrait);
+    ++frames;
+    for (int vw = 0; vw < 2; ++vw)
+    {
+      const Cloud::Ptr cloud = vw == 0 ? frame.cloud : portrait;
+      agex::DepthPipelineParams person_params, box_params;
+      box_params.isolate_people = false;
+      box_params.use_crop_box = true;
+      agex::DepthPipeline<pcl::PointXYZ> person_pipe (person_params), box_pipe (box_params);
+      agex::DepthPipelineResult person_result, box_result;
+      person_pipe.setInputCloud (cloud);
+      person_pipe.compute (person_result);
+      box_pipe.setInputCloud (cloud);
+      box_pipe.compute (box_result);
+      one[vw] += person_result.persons.size () == 1;
+      const double overlap = iou (person_result.meshIndices (), box_result.meshIndices ());
+      iou_sum[vw] += overlap;
+      iou_min[vw] = std::min (iou_min[vw], overlap);
+      std::vector<unsigned char> person (cloud->size (), 0);
+      for (const auto &p : person_result.persons)
+        for (const auto i : p.indices)
+          person[i] = 1;
+      const int w = static_cast<int> (cloud->width), h = static_cast<int> (cloud->height), r = vw == 0 ? 3 : 1;
+      for (const auto &l : labels)
+      {
+        if (l.sequence != sequence || l.frame != name || !l.keyframe)
+          continue;
+        cv::Point2f t (l.tip_px.x (), l.tip_px.y ());
+        if (vw == 1)
+          t = view.toView (t);
+        tips += vw == 0;
+        bool hit = false;
+        const int u0 = static_cast<int> (std::lround (t.x)), v0 = static_cast<int> (std::lround (t.y));
+        for (int v = std::max (0, v0 - r); v <= std::min (h - 1, v0 + r); ++v)
+          for (int u = std::max (0, u0 - r); u <= std::min (w - 1, u0 + r); ++u)
+            hit = hit || person[v * w + u];
+        near[vw] += hit;
+      }
+    }
+  }
+  for (int vw = 0; vw < 2; ++vw)
+    std::printf ("%s: %d frames, one person in %d; person meshes against box meshes IoU %.3f mean, %.3f worst; "
+                 "keyframe tips near the person %d of %d\n",
+                 vw ? "144x176" : "640x480", frames, one[vw], iou_sum[vw] / std::max (1, frames), iou_min[vw], near[vw],
+                 tips);
   return 0;
 }
 
@@ -463,6 +580,8 @@ main (int argc, char **argv)
   if (argc < 3)
   {
     std::cerr << "usage: person_isolation_stats bonn SHARED_DATA [SEQUENCES [SHIFTS]] [--pipeline]\n"
+                 "           [--dump PREFIX KEYFRAME [--crop X,Y,W,H,ZOOM]]\n"
+                 "       person_isolation_stats bonn-all SHARED_DATA\n"
                  "       person_isolation_stats kinect SHARED_DATA\n";
     return 2;
   }
@@ -471,17 +590,39 @@ main (int argc, char **argv)
     const std::string mode = argv[1], shared = argv[2];
     if (mode == "kinect")
       return runKinect (shared);
+    if (mode == "bonn-all")
+      return runBonnAll (shared);
     std::vector<std::string> rest;
     bool pipeline = false;
+    Dump dump;
     for (int a = 3; a < argc; ++a)
-      if (std::string (argv[a]) == "--pipeline")
+    {
+      const std::string arg = argv[a];
+      if (arg == "--pipeline")
         pipeline = true;
+      else if (arg == "--dump" && a + 2 < argc)
+      {
+        dump.prefix = argv[++a];
+        dump.keyframe = argv[++a];
+      }
+      else if (arg == "--crop" && a + 1 < argc)
+      {
+        int x = 0, y = 0, w = 0, h = 0, zoom = 0;
+        if (std::sscanf (argv[++a], "%d,%d,%d,%d,%d", &x, &y, &w, &h, &zoom) != 5 || w <= 0 || h <= 0 || zoom < 1 ||
+            zoom > 16)
+          throw std::invalid_argument ("--crop takes x,y,width,height,zoom (zoom 1-16)");
+        dump.crop = cv::Rect (x, y, w, h);
+        dump.zoom = zoom;
+      }
+      else if (arg.rfind ("--", 0) == 0)
+        throw std::invalid_argument ("unknown flag " + arg);
       else
-        rest.emplace_back (argv[a]);
+        rest.push_back (arg);
+    }
     const std::vector<std::string> sequences = splitList (rest.size () > 0 ? rest[0] : "7,8");
     const std::vector<std::string> shifts =
         splitList (rest.size () > 1 ? rest[1] : "0:0,1:0,1.5:0,2:0,1:-0.6,1:0.6,2:-0.6,2:0.6");
-    return runBonn (shared, sequences, shifts, pipeline);
+    return runBonn (shared, sequences, shifts, pipeline, dump);
   }
   catch (const std::exception &e)
   {

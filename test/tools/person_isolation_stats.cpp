@@ -17,6 +17,9 @@
 //   person_isolation_stats bonn-all SHARED_DATA
 //       All Bonn frames at 640x480 and 144x176: frames with exactly one person, the person's
 //       meshes against the crop box's (IoU), keyframe tips within 3 (1) pixels of the person.
+//   person_isolation_stats dataset DIR
+//       A synthetic dataset with person images (agex_synth --people N): labelled persons with
+//       a visible tip at 0.8-4 m isolated, found persons mostly no one (doc/results.md).
 //   person_isolation_stats kinect SHARED_DATA
 //       five_people.pcd and Skeltrack's frames: persons, their columns, depths and pixels.
 #include <agex/detection/depth_pipeline.h>
@@ -36,6 +39,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <iterator>
 #include <iostream>
 #include <limits>
@@ -531,6 +535,99 @@ runBonnAll (const std::string &shared)
   return 0;
 }
 
+/** A synthetic dataset with person images (agex_synth --people N): of the labelled persons
+  * with a visible tip at 0.8-4 m, those isolated (one found person holds at least a fifth of
+  * the person's pixels and is at least half that person), and the found persons that are
+  * mostly no one (doc/results.md, "Which persons isolation loses"). */
+int
+runDataset (const std::string &dir)
+{
+  std::map<std::string, std::set<int>> wanted;  // frame -> persons with a visible tip at 0.8-4 m
+  {
+    std::ifstream in (dir + "/labels.csv");
+    if (!in)
+      throw std::runtime_error (dir + "/labels.csv: cannot be read");
+    std::string line;
+    std::getline (in, line);
+    while (std::getline (in, line))
+    {
+      std::vector<std::string> f;
+      std::stringstream row (line);
+      std::string cell;
+      while (std::getline (row, cell, ','))
+        f.push_back (cell);
+      if (f.size () < 16)
+        continue;
+      const float z = std::stof (f[5]);
+      if (f[13] == "1" && z >= 0.8f && z <= 4.f)
+        wanted[f[0]].insert (std::stoi (f[15]));
+    }
+  }
+  int persons = 0, isolated = 0, found_total = 0, nobody = 0, frames = 0;
+  std::vector<std::string> lost;
+  for (const auto &entry : std::filesystem::directory_iterator (dir + "/frames"))
+  {
+    const std::string frame = entry.path ().stem ().string ();
+    const agex::Frame depth = agex::loadFrame (entry.path ().string ());
+    const cv::Mat ids = cv::imread (dir + "/persons/" + frame + ".png", cv::IMREAD_UNCHANGED);
+    if (ids.empty () || ids.cols != static_cast<int> (depth.cloud->width) || ids.rows != static_cast<int> (depth.cloud->height))
+      throw std::runtime_error (dir + "/persons/" + frame + ".png: missing or not the frame's size");
+    ++frames;
+    agex::PersonSegmentation<pcl::PointXYZ> seg;
+    seg.setInputCloud (depth.cloud);
+    std::vector<pcl::PointIndices> found;
+    seg.segment (found);
+    found_total += static_cast<int> (found.size ());
+    std::map<int, int> visible;  // person -> pixels with depth
+    for (int i = 0; i < static_cast<int> (depth.cloud->size ()); ++i)
+      if (std::isfinite ((*depth.cloud)[i].z) && ids.data[i] > 0)
+        ++visible[ids.data[i]];
+    std::set<int> kept;
+    for (const auto &f : found)
+    {
+      std::map<int, int> votes;
+      for (const auto i : f.indices)
+        ++votes[ids.data[i]];
+      int best = 0, best_count = 0;
+      for (const auto &v : votes)
+        if (v.first > 0 && v.second > best_count)
+        {
+          best = v.first;
+          best_count = v.second;
+        }
+      if (best == 0 || 2 * best_count < static_cast<int> (f.indices.size ()))
+      {
+        ++nobody;
+        const agex::PersonInfo &info = seg.getPersons ()[&f - found.data ()];
+        double column = 0;
+        for (const auto i : f.indices)
+          column += i % depth.cloud->width;
+        std::printf ("no one: %s column %.0f, %zu px, %.2f m, top %.2f, bottom %.2f, width %.2f, floor %d\n", frame.c_str (),
+                     column / f.indices.size (), f.indices.size (), info.distance, info.top, info.bottom, info.width,
+                     info.on_floor);
+        continue;
+      }
+      if (5 * best_count >= visible[best])
+        kept.insert (best);
+    }
+    for (const int k : wanted[frame])
+    {
+      ++persons;
+      if (kept.count (k))
+        ++isolated;
+      else
+        lost.push_back (frame + "/" + std::to_string (k));
+    }
+  }
+  std::printf ("%d frames: %d of %d persons with a visible tip at 0.8-4 m isolated; found persons mostly no one: %d of %d\n",
+               frames, isolated, persons, nobody, found_total);
+  std::printf ("lost:");
+  for (const auto &l : lost)
+    std::printf (" %s", l.c_str ());
+  std::printf ("\n");
+  return 0;
+}
+
 int
 runKinect (const std::string &shared)
 {
@@ -582,6 +679,7 @@ main (int argc, char **argv)
     std::cerr << "usage: person_isolation_stats bonn SHARED_DATA [SEQUENCES [SHIFTS]] [--pipeline]\n"
                  "           [--dump PREFIX KEYFRAME [--crop X,Y,W,H,ZOOM]]\n"
                  "       person_isolation_stats bonn-all SHARED_DATA\n"
+                 "       person_isolation_stats dataset DIR\n"
                  "       person_isolation_stats kinect SHARED_DATA\n";
     return 2;
   }
@@ -592,6 +690,8 @@ main (int argc, char **argv)
       return runKinect (shared);
     if (mode == "bonn-all")
       return runBonnAll (shared);
+    if (mode == "dataset")
+      return runDataset (shared);
     std::vector<std::string> rest;
     bool pipeline = false;
     Dump dump;

@@ -131,7 +131,9 @@ enum class PersonVerdict;
   *    of person-like size in front of the background).
   * 8. **Full resolution.** A pixel in the block of a person's cell, or of a free cell next
   *    to one, is the person's when its depth lies within the gap of the depths of the
-  *    person's cells around it (and above the floor margin, and on its side of a cut). It
+  *    person's cells around it (and above the floor margin, or, the feet, above the floor
+  *    under the person and right under a pixel of the person: kMinFootHeight; and on its side
+  *    of a cut). It
   *    is a test per pixel: following connections pixel by pixel is left to the surface
   *    segmentation that runs on the persons' pixels anyway.
   *
@@ -186,8 +188,8 @@ public:
   void setFloorMaxTilt (float degrees) { floor_max_tilt_deg_ = degrees; }
   float getFloorMaxTilt () const { return floor_max_tilt_deg_; }
   /** Floor inlier distance for the search, and the least floor margin: points lower than
-    * max(this, 3 noise(z) H / z) above the floor, H their depth below the camera, belong to
-    * nobody (default 0.04 m). */
+    * max(this, 3 noise(z) H / z) above the floor, H their height below the camera, belong
+    * to nobody but the feet (kMinFootHeight; default 0.04 m). */
   void setFloorDistance (float metres) { floor_distance_ = metres; }
   float getFloorDistance () const { return floor_distance_; }
   /** A plane found is the floor only if its inliers spread over an area: the smaller

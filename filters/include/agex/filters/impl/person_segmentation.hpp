@@ -122,7 +122,7 @@ struct PersonBlocks
   std::vector<float> zlo, zhi;
   std::vector<int> cells;  ///< this person's blocks
   float floor_level = 0.f;   ///< height of the floor under this person, from its floor cells
-  std::vector<float> levels;
+  std::vector<float> levels;  ///< the floor cells' heights it is the median of
 };
 
 /** One person's full-resolution pixels. */

@@ -73,10 +73,10 @@ enum class PersonVerdict;
   *    cells whose surface faces up (within the tilt limit and 20 degrees more; a few
   *    dozen cells are enough, a far floor shows in a few rows of them), and kept only if
   *    its inliers spread over an area (setMinFloorSpread) and at most a quarter as many
-  *    cells lie under it (level tops of a body have the body under them). Points less than the
-  *    floor margin, max(floor distance, 3 noise(z) H / z), above it are nobody's: a depth
-  *    error moves a point along its viewing ray, which changes the height of a point H below
-  *    the camera by H / z of it.
+  *    cells lie under it (level tops of a body have the body under them). Points less than
+  *    the floor margin, max(floor distance, 3 noise(z) H / z), above it are nobody's but the
+  *    feet (8.): a depth error moves a point along its viewing ray, which changes the height
+  *    of a point H below the camera by H / z of it.
   * 3. **Clusters.** 8-neighbour cells are connected when their depths differ by less than
   *    a gap that grows with depth: max(min gap, slope * spacing + 3 noise(z)), where
   *    spacing = step z / f is the distance between the cells on a surface facing the
@@ -133,9 +133,8 @@ enum class PersonVerdict;
   *    to one, is the person's when its depth lies within the gap of the depths of the
   *    person's cells around it (and above the floor margin, or, the feet, above the floor
   *    under the person and right under a pixel of the person: kMinFootHeight; and on its side
-  *    of a cut). It
-  *    is a test per pixel: following connections pixel by pixel is left to the surface
-  *    segmentation that runs on the persons' pixels anyway.
+  *    of a cut). It is a test per pixel: following connections pixel by pixel is left to the
+  *    surface segmentation that runs on the persons' pixels anyway.
   *
   * "Too far" (getTooFar): a hand of the hand area at the person's distance covers
   * hand_area * fx * fy / z^2 pixels; below the minimum hand pixels the detector has too few

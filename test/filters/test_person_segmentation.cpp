@@ -1,7 +1,9 @@
 // agex::PersonSegmentation: synthetic rooms rendered by ray casting (people side by side,
 // apart and touching, a person cut in two by a railing in front, furniture without anyone,
-// a person at 5 m), the floor-free rule on Skeltrack's upper bodies, PCL's five_people
-// frame, Bonn frames, and misuse.
+// a person at 5 m, people without a floor in view, a person cut by the image's border, a
+// floor seen only far away, the feet at the floor), the floor-free rule on Skeltrack's upper
+// bodies, PCL's five_people frame, Bonn frames at their distance and moved 1-2 m back, and
+// misuse.
 
 #include "test_support.h"
 
@@ -561,7 +563,8 @@ TEST (PersonSegmentation, PersonAtFiveMetresIsFoundAndNotTooFar)
   scene.addBox (-4.0, 4.0, 0.0, 2.6, 7.0, 7.1);
   scene.addPerson (0.4, 5.0);
   const DepthCamera cam;
-  const Found found = segment (scene.render (cam));
+  const Cloud::Ptr cloud = scene.render (cam);
+  const Found found = segment (cloud);
   ASSERT_EQ (found.persons.size (), 1u);
   const agex::PersonInfo &info = found.infos[0];
   EXPECT_NEAR (info.distance, 5.0, 0.2);
@@ -569,6 +572,13 @@ TEST (PersonSegmentation, PersonAtFiveMetresIsFoundAndNotTooFar)
   // A 0.01 m^2 hand at 5 m covers 0.01 * 525^2 / 25 = 110 pixels: enough.
   EXPECT_NEAR (info.hand_pixels, 110.0, 10.0);
   EXPECT_FALSE (info.too_far);
+  // All of it, down to the feet: the floor margin is the height noise (3 x 3.75 cm of depth
+  // noise seen 1 m above the floor from 5 m away is 2.3 cm of height), not the depth noise.
+  double recall, precision;
+  overlap (found.persons[0], personMask (0.4, 5.0, cam), recall, precision);
+  EXPECT_GT (recall, 0.95);
+  EXPECT_GT (precision, 0.98);
+  EXPECT_GT (pointsBelow (*cloud, found.persons[0], 0.08), 40);
 
   // The same scene seen at 160x120: the hand has 7 pixels, too few.
   const DepthCamera small = cam.scaled (160);
@@ -581,6 +591,133 @@ TEST (PersonSegmentation, PersonAtFiveMetresIsFoundAndNotTooFar)
   seg.segment (persons);
   ASSERT_EQ (seg.getTooFar ().size (), 1u);
   EXPECT_TRUE (seg.getTooFar ()[0]);
+}
+
+TEST (PersonSegmentation, PeopleWithoutAFloorInViewAreFound)
+{
+  // The background already removed (nothing but the people in the frame, no floor): one at
+  // 2.5 m and one at 4.5 m, each found by the floor-free rule with all its pixels.
+  Scene scene;
+  scene.floor = false;
+  scene.addPerson (-0.5, 2.5);
+  scene.addPerson (0.8, 4.5);
+  const DepthCamera cam;
+  Segmentation seg;
+  const Found found = segment (scene.render (cam), &seg);
+  EXPECT_FALSE (seg.getFloorFound ());
+  ASSERT_EQ (found.persons.size (), 2u);
+  const bool near_first = found.infos[0].distance < found.infos[1].distance;
+  const auto near = personMask (-0.5, 2.5, cam), far = personMask (0.8, 4.5, cam);
+  for (int k = 0; k < 2; ++k)
+  {
+    double recall, precision;
+    overlap (found.persons[k], (k == 0) == near_first ? near : far, recall, precision);
+    EXPECT_GT (recall, 0.97) << "person " << k;
+    EXPECT_GT (precision, 0.99) << "person " << k;
+    EXPECT_FALSE (found.infos[k].on_floor);
+  }
+}
+
+TEST (PersonSegmentation, PersonCutByTheLeftBorderKeepsItsVisibleParts)
+{
+  // At 3 m the image's left border lies 1.826 m left of the axis: a person 0.12 m right of it
+  // has the left arm and half the body outside the frame and the left leg at the border.
+  Scene scene;
+  const double x = -319.5 / 525.0 * 3.0 + 0.12;
+  scene.addPerson (x, 3.0);
+  scene.addPerson (1.0, 3.5);  // and someone else in full view
+  const DepthCamera cam;
+  const Cloud::Ptr cloud = scene.render (cam);
+  const Found found = segment (cloud);
+  ASSERT_EQ (found.persons.size (), 2u);
+  const int k = meanColumn (*cloud, found.persons[0]) < meanColumn (*cloud, found.persons[1]) ? 0 : 1;
+  EXPECT_TRUE (found.infos[k].border & agex::PersonInfo::kLeft);
+  double recall, precision;
+  overlap (found.persons[k], personMask (x, 3.0, cam), recall, precision);
+  EXPECT_GT (recall, 0.95);
+  EXPECT_GT (precision, 0.99);
+  // Both legs (0.2-0.8 m above the floor): the left one's visible strip at columns 0-12,
+  // the right one round column 38.
+  long left_leg = 0, right_leg = 0;
+  for (const auto i : found.persons[k].indices)
+  {
+    const double height = 1.0 - (*cloud)[i].y;
+    const int u = i % cam.width;
+    if (height < 0.2 || height > 0.8)
+      continue;
+    left_leg += u <= 12;
+    right_leg += u >= 28 && u <= 50;
+  }
+  EXPECT_GT (left_leg, 500);
+  EXPECT_GT (right_leg, 1500);
+}
+
+TEST (PersonSegmentation, FloorSeenOnlyFarAwayIsFound)
+{
+  // A person at 5 m in front of a wall at 6 m, the floor in view only from 4.5 m on (as in a
+  // frame moved back from the camera, or a camera tilted up): three rows of cells of floor,
+  // enough to find it; without it the person's feet join the floor and nobody is found.
+  // A time-of-flight camera's noise (a third of a Kinect's at 5 m; with a Kinect's, noisy
+  // cells of the wall and the person pass for level ones too).
+  Scene scene;
+  scene.noise = 0.0005;
+  scene.addBox (-4.0, 4.0, 0.0, 2.6, 6.0, 6.1);
+  scene.addPerson (0.3, 5.0);
+  const DepthCamera cam;
+  const Cloud::Ptr cloud = scene.render (cam);
+  for (auto &p : *cloud)
+    if (p.z < 4.5f && 1.f - p.y < 0.1f)
+      p = agex_test::nanPoint ();
+  Segmentation seg;
+  const Found found = segment (cloud, &seg);
+  EXPECT_TRUE (seg.getFloorFound ());
+  // Where the person stands, the plane is the floor (its tilt and offset are less sure,
+  // seen over 1.5 m of depth only).
+  const Eigen::Vector4f plane = seg.getFloorPlane ();
+  EXPECT_NEAR (plane.head<3> ().dot (Eigen::Vector3f (0.3f, 1.f, 5.f)) + plane[3], 0.0, 0.02) << plane.transpose ();
+  ASSERT_EQ (found.persons.size (), 1u);
+  EXPECT_TRUE (found.infos[0].on_floor);
+  double recall, precision;
+  overlap (found.persons[0], personMask (0.3, 5.0, cam), recall, precision);
+  EXPECT_GT (recall, 0.95);
+  EXPECT_GT (precision, 0.98);
+}
+
+TEST (PersonSegmentation, FeetJustAboveTheFloorStayWithThePerson)
+{
+  // The floor margin (4 cm) would cut the feet off at the floor: the shoe's pixels 1.5-3 cm
+  // above the floor are the person's, the floor beside them is not.
+  for (const double z : {2.5, 4.0})
+  {
+    SCOPED_TRACE (z);
+    Scene scene;
+    scene.addPerson (0.2, z);
+    const DepthCamera cam;
+    const Cloud::Ptr cloud = scene.render (cam);
+    const Found found = segment (cloud);
+    ASSERT_EQ (found.persons.size (), 1u);
+    // The person alone without noise: which pixels are its feet, how high.
+    Scene alone;
+    alone.floor = false;
+    alone.noise = 0.0;
+    alone.addPerson (0.2, z);
+    const Cloud::Ptr exact = alone.render (cam);
+    long low = 0, low_kept = 0, floor_taken = 0;
+    for (std::size_t i = 0; i < cloud->size (); ++i)
+    {
+      const bool person = std::isfinite ((*exact)[i].z);
+      const double height = 1.0 - (*exact)[i].y;
+      if (person && height > 0.015 && height <= 0.03)
+      {
+        ++low;
+        low_kept += found.labels[i].label == 0;
+      }
+      floor_taken += !person && found.labels[i].label == 0;
+    }
+    ASSERT_GT (low, 20);
+    EXPECT_GT (low_kept, 0.8 * low) << low_kept << " of " << low;
+    EXPECT_LT (floor_taken, 0.002 * found.persons[0].indices.size ());
+  }
 }
 
 TEST (PersonSegmentation, SameResultAtEveryResolutionAndPointType)
@@ -886,6 +1023,100 @@ TEST (PersonSegmentationReal, FivePeopleInPclsFrame)
     EXPECT_FALSE (info.too_far);
   }
   EXPECT_EQ (matched, std::vector<int> (5, 1));
+}
+
+namespace
+{
+/** Every finite point moved by (dx, 0, dz), projected with the Kinect intrinsics and
+  * z-buffered into a frame of the same size (each point over the pixels its own pixel covers
+  * at the new depth, nearest wins); tag goes along with the points. */
+Cloud::Ptr
+movedFrame (const Cloud &in, const std::vector<unsigned char> &tag, float dx, float dz, std::vector<unsigned char> &moved_tag)
+{
+  const DepthCamera cam;
+  const int w = static_cast<int> (in.width), h = static_cast<int> (in.height);
+  Cloud::Ptr out = agex_test::nanCloud (w, h);
+  moved_tag.assign (in.size (), 0);
+  for (std::size_t i = 0; i < in.size (); ++i)
+  {
+    const pcl::PointXYZ &p = in[i];
+    if (!std::isfinite (p.z))
+      continue;
+    const float x = p.x + dx, z = p.z + dz;
+    const int s = std::max (1, static_cast<int> (std::ceil (p.z / z - 1e-3f)));
+    const auto u0 = static_cast<int> (std::lround (cam.f * x / z + cam.cx - 0.5 * (s - 1)));
+    const auto v0 = static_cast<int> (std::lround (cam.f * p.y / z + cam.cy - 0.5 * (s - 1)));
+    for (int v = std::max (0, v0); v < std::min (h, v0 + s); ++v)
+      for (int u = std::max (0, u0); u < std::min (w, u0 + s); ++u)
+      {
+        pcl::PointXYZ &q = (*out) (u, v);
+        if (std::isfinite (q.z) && q.z <= z)
+          continue;
+        q = pcl::PointXYZ (static_cast<float> ((u - cam.cx) * z / cam.f), static_cast<float> ((v - cam.cy) * z / cam.f), z);
+        moved_tag[v * w + u] = tag[i];
+      }
+  }
+  return out;
+}
+}  // namespace
+
+TEST (PersonSegmentationReal, BonnPersonMovedBackIsFound)
+{
+  // Bonn keyframes (one with both hands on the head) with every point moved 1-2 m back and
+  // up to 0.6 m sideways, the person at 3.3-4.3 m: still exactly one person, with the pixels
+  // of the person at its own distance that are still in view (the floor is in view only from
+  // 3.2-4.2 m on; the crown of the hands on the head must not take in the elbows), and the
+  // feet.
+  const std::string labels_path = agex_test::sharedData ("bonn/labels.csv");
+  AGEX_REQUIRE_BONN (labels_path);
+  const std::vector<agex::BonnLabel> labels = agex::readBonnLabels (labels_path);
+  const char *const frames[][2] = {{"5", "037"}, {"7", "022"}, {"8", "040"}};
+  const float moves[][2] = {{1.f, 0.f}, {1.5f, 0.f}, {2.f, 0.f}, {2.f, -0.6f}, {2.f, 0.6f}};
+  int feet = 0, feet_found = 0;
+  for (const auto &id : frames)
+  {
+    const std::string path = agex_test::sharedData (std::string ("bonn/depth/") + id[0] + "/" + id[1] + ".png");
+    AGEX_REQUIRE_BONN (path);
+    const agex::Frame frame = agex::loadFrame (path);
+    const Found native = segment (frame.cloud);
+    ASSERT_EQ (native.persons.size (), 1u);
+    std::vector<unsigned char> person (frame.cloud->size (), 0);
+    for (const auto i : native.persons[0].indices)
+      person[i] = 1;
+    std::vector<Eigen::Vector3f> toes;
+    for (const auto &l : labels)
+    {
+      Eigen::Vector3f p;
+      if (l.sequence == id[0] && l.frame == id[1] && l.part == agex::BodyPart::Foot &&
+          agex::liftPixelToSurface (*frame.cloud, l.tip_px.x (), l.tip_px.y (), 6, 0.05f, p))
+        toes.push_back (p);
+    }
+    for (const auto &m : moves)
+    {
+      SCOPED_TRACE (std::string (id[0]) + "_" + id[1] + " moved by " + std::to_string (m[0]) + ", " +
+                    std::to_string (m[1]));
+      std::vector<unsigned char> carried;
+      const Cloud::Ptr moved = movedFrame (*frame.cloud, person, m[1], m[0], carried);
+      const Found found = segment (moved);
+      ASSERT_EQ (found.persons.size (), 1u);
+      EXPECT_NEAR (found.infos[0].distance, native.infos[0].distance + m[0], 0.15);
+      const auto in_view = std::count (carried.begin (), carried.end (), 1);
+      const auto kept = std::count_if (found.persons[0].indices.begin (), found.persons[0].indices.end (),
+                                       [&] (int i) { return carried[i] != 0; });
+      EXPECT_GT (kept, 0.95 * in_view);
+      EXPECT_GT (kept, 0.98 * found.persons[0].indices.size ());
+      // A person pixel within 5 cm of each labelled toe.
+      for (const auto &toe : toes)
+      {
+        const Eigen::Vector3f q = toe + Eigen::Vector3f (m[1], 0.f, m[0]);
+        ++feet;
+        feet_found += std::any_of (found.persons[0].indices.begin (), found.persons[0].indices.end (),
+                                   [&] (int i) { return ((*moved)[i].getVector3fMap () - q).norm () < 0.05f; });
+      }
+    }
+  }
+  EXPECT_EQ (feet, 30);
+  EXPECT_EQ (feet_found, feet);
 }
 
 TEST (PersonSegmentationReal, BonnPersonAtBothViews)

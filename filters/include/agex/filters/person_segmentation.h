@@ -70,9 +70,13 @@ enum class PersonVerdict;
   *    full resolution at the end.
   * 2. **Floor.** The plane given with setFloorPlane (n.p + d = height above the floor, as
   *    agex::FloorRemoval::getFloorPlane returns it), or else agex::FloorRemoval run on the
-  *    cells whose surface faces up (within the tilt limit and 20 degrees more), and kept
-  *    only if its inliers spread over an area (setMinFloorSpread). Points less than the
-  *    floor margin, max(floor distance, 3 noise(z)), above it are nobody's.
+  *    cells whose surface faces up (within the tilt limit and 20 degrees more; a few
+  *    dozen cells are enough, a far floor shows in a few rows of them), and kept only if
+  *    its inliers spread over an area (setMinFloorSpread) and at most a quarter as many
+  *    cells lie under it (level tops of a body have the body under them). Points less than
+  *    the floor margin, max(floor distance, 3 noise(z) H / z), above it are nobody's but the
+  *    feet (8.): a depth error moves a point along its viewing ray, which changes the height
+  *    of a point H below the camera by H / z of it.
   * 3. **Clusters.** 8-neighbour cells are connected when their depths differ by less than
   *    a gap that grows with depth: max(min gap, slope * spacing + 3 noise(z)), where
   *    spacing = step z / f is the distance between the cells on a surface facing the
@@ -127,9 +131,10 @@ enum class PersonVerdict;
   *    of person-like size in front of the background).
   * 8. **Full resolution.** A pixel in the block of a person's cell, or of a free cell next
   *    to one, is the person's when its depth lies within the gap of the depths of the
-  *    person's cells around it (and above the floor margin, and on its side of a cut). It
-  *    is a test per pixel: following connections pixel by pixel is left to the surface
-  *    segmentation that runs on the persons' pixels anyway.
+  *    person's cells around it (and above the floor margin, or, the feet, above the floor
+  *    under the person and right under a pixel of the person: kMinFootHeight; and on its side
+  *    of a cut). It is a test per pixel: following connections pixel by pixel is left to the
+  *    surface segmentation that runs on the persons' pixels anyway.
   *
   * "Too far" (getTooFar): a hand of the hand area at the person's distance covers
   * hand_area * fx * fy / z^2 pixels; below the minimum hand pixels the detector has too few
@@ -182,7 +187,8 @@ public:
   void setFloorMaxTilt (float degrees) { floor_max_tilt_deg_ = degrees; }
   float getFloorMaxTilt () const { return floor_max_tilt_deg_; }
   /** Floor inlier distance for the search, and the least floor margin: points lower than
-    * max(this, 3 noise(z)) above the floor belong to nobody (default 0.04 m). */
+    * max(this, 3 noise(z) H / z) above the floor, H their height below the camera, belong
+    * to nobody but the feet (kMinFootHeight; default 0.04 m). */
   void setFloorDistance (float metres) { floor_distance_ = metres; }
   float getFloorDistance () const { return floor_distance_; }
   /** A plane found is the floor only if its inliers spread over an area: the smaller
@@ -190,6 +196,13 @@ public:
     * such as the lower edge of a torso cut off by the image has a few centimetres). */
   void setMinFloorSpread (float metres) { min_floor_spread_ = metres; }
   float getMinFloorSpread () const { return min_floor_spread_; }
+  /** Fewest upward-facing cells the floor search runs on (a floor seen only far away, 4-6 m,
+    * shows in a few rows of cells; the spread rule and the cells under the plane judge it). */
+  static constexpr int kMinFloorCells = 16;
+  /** Below the floor margin, a person's pixels (the feet) are those above the floor under the
+    * person (the median height of the floor cells among its blocks) by at least three times
+    * their height noise and at least this, metres. */
+  static constexpr float kMinFootHeight = 0.01f;
 
   /** Focal lengths in pixels; 0 (default): estimated from the cloud. Given or estimated, a
     * focal length outside kMinFocalLength to kMaxFocalLength (agex/common/focal_length.h; a
@@ -249,8 +262,9 @@ public:
   /** Least visible area, square metres (default 0.12: a head and shoulders). */
   void setMinArea (float square_metres) { min_area_ = square_metres; }
   float getMinArea () const { return min_area_; }
-  /** The narrow-top rule: the crown, the cells within drop metres (plus twice the depth
-    * noise) of the top, spans across the view without a gap at most ratio times the width
+  /** The narrow-top rule: the crown, the cells within drop metres (plus twice the height
+    * noise there, the depth noise times the top's height above the camera over its depth) of
+    * the top, spans across the view without a gap at most ratio times the width
     * of the upright parts across the view (defaults 0.05 m and 0.75). A head is narrower
     * than the shoulders and hips below it (with hands on it too, 0.45 m against 0.65 m;
     * raised hands count each on their own; seen from the side, the head's 0.2 m against the
@@ -372,7 +386,7 @@ private:
                          const detail::PersonPixels &pixels) const;
 
   // The rules the steps share: connection, statistics and the verdict on a set of parts.
-  float floorMargin (float z) const;
+  float floorMargin (const detail::PersonScan &scan, float z, float h) const;
   bool connected (const detail::PersonScan &scan, const detail::PersonGridCell &a, const detail::PersonGridCell &b,
                   bool diagonal) const;
   void measure (const detail::PersonScan &scan, const std::vector<detail::PersonPart> &parts,

@@ -121,6 +121,8 @@ struct PersonBlocks
   std::vector<int> stamp;  ///< the person whose blocks last included the cell
   std::vector<float> zlo, zhi;
   std::vector<int> cells;  ///< this person's blocks
+  float floor_level = 0.f;   ///< height of the floor under this person, from its floor cells
+  std::vector<float> levels;  ///< the floor cells' heights it is the median of
 };
 
 /** One person's full-resolution pixels. */
@@ -137,11 +139,29 @@ personDepthGap (float z, float spacing_per_metre, float slope, float noise, floa
   return std::max (min_gap, slope * spacing_per_metre * z + 3.f * noise * z * z);
 }
 
-/** How far the floor's inliers spread on it: the smaller standard deviation of their
-  * positions in the plane (a strip, such as a body's lower edge cut by the image, has
-  * almost none). */
-template <typename PointT> float
-floorSpread (const pcl::PointCloud<PointT> &cloud, const pcl::Indices &indices, const Eigen::Vector4f &plane,
+/** The noise of a height measured at depth z, rel metres above or below the camera along
+  * the up axis: depth noise moves a point along its viewing ray, which changes its height by
+  * rel / z of the depth error (a floor 1 m below the camera seen 4 m away: a quarter of it;
+  * the top of a head near the camera's height: almost nothing). */
+inline float
+heightNoise (float noise, float z, float rel)
+{
+  return noise * z * std::abs (rel);  // noise(z) = noise z^2, times rel / z
+}
+
+/** What a plane found among the cells looks like from all of them: how far its inliers
+  * spread on it (the smaller standard deviation of their positions in the plane: a strip,
+  * such as a body's lower edge cut by the image, has almost none), how many cells lie on it
+  * and how many under it. */
+struct FloorExtent
+{
+  float spread = 0.f;  ///< metres
+  int inliers = 0;     ///< cells within the distance of the plane
+  int below = 0;       ///< cells below it by more than the floor search's limit
+};
+
+template <typename PointT> FloorExtent
+floorExtent (const pcl::PointCloud<PointT> &cloud, const pcl::Indices &indices, const Eigen::Vector4f &plane,
              float distance)
 {
   const Eigen::Vector3f normal = plane.head<3> ();
@@ -152,23 +172,28 @@ floorSpread (const pcl::PointCloud<PointT> &cloud, const pcl::Indices &indices, 
   const Eigen::Vector3f b = normal.cross (a);
   Eigen::Vector2d sum = Eigen::Vector2d::Zero ();
   Eigen::Matrix2d products = Eigen::Matrix2d::Zero ();
-  int count = 0;
+  FloorExtent extent;
+  // agex::FloorRemoval's limit for "under the plane".
+  const float below_limit = -std::max (0.10f, 3.f * distance);
   for (const auto i : indices)
   {
     const Eigen::Vector3f p = cloud[i].getVector3fMap ();
-    if (std::abs (normal.dot (p) + plane[3]) >= distance)
+    const float h = normal.dot (p) + plane[3];
+    extent.below += h < below_limit;
+    if (std::abs (h) >= distance)
       continue;
     const Eigen::Vector2d q (a.dot (p), b.dot (p));
     sum += q;
     products += q * q.transpose ();
-    ++count;
+    ++extent.inliers;
   }
-  if (count < 3)
-    return 0.f;
-  const Eigen::Vector2d mean = sum / count;
-  const Eigen::Matrix2d covariance = products / count - mean * mean.transpose ();
+  if (extent.inliers < 3)
+    return extent;
+  const Eigen::Vector2d mean = sum / extent.inliers;
+  const Eigen::Matrix2d covariance = products / extent.inliers - mean * mean.transpose ();
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> solver (covariance, Eigen::EigenvaluesOnly);
-  return static_cast<float> (std::sqrt (std::max (0.0, solver.eigenvalues ()[0])));
+  extent.spread = static_cast<float> (std::sqrt (std::max (0.0, solver.eigenvalues ()[0])));
+  return extent;
 }
 
 /** The bin of value in n bins of size bin from lo, clamped to [0, n): a coordinate far from
@@ -267,6 +292,18 @@ inline float
 groundDistance (const PersonPartStats &a, const PersonPartStats &b)
 {
   return std::hypot (a.latMean () - b.latMean (), a.fwdMean () - b.fwdMean ());
+}
+
+/** Whether one of the three pixels above pixel i carries label (those rows are done when
+  * pixel i is looked at: the pixels are taken row by row). */
+inline bool
+belowPerson (const pcl::PointCloud<pcl::Label> &labels, int i, int width, std::uint32_t label)
+{
+  if (i < width)
+    return false;
+  const int u = i % width, above = i - width;
+  return labels[above].label == label || (u > 0 && labels[above - 1].label == label) ||
+         (u + 1 < width && labels[above + 1].label == label);
 }
 
 /** Person k's blocks: its cells and the free cells next to them (a pixel of a free block may
@@ -462,9 +499,9 @@ agex::PersonSegmentation<PointT>::usable (const detail::PersonScan &scan, int i)
 }
 
 template <typename PointT> float
-agex::PersonSegmentation<PointT>::floorMargin (float z) const
+agex::PersonSegmentation<PointT>::floorMargin (const detail::PersonScan &scan, float z, float h) const
 {
-  return std::max (floor_distance_, 3.f * depth_noise_ * z * z);
+  return std::max (floor_distance_, 3.f * detail::heightNoise (depth_noise_, z, h - scan.offset));
 }
 
 template <typename PointT> bool
@@ -620,10 +657,21 @@ agex::PersonSegmentation<PointT>::findFloor (detail::PersonScan &scan)
   floor.setDistanceThreshold (floor_distance_);
   // About 2,000 points: plenty for a plane, and RANSAC's cost grows with them.
   floor.setSampleStride (std::max (1, static_cast<int> (level->size () / 2000)));
+  // The floor far away may be seen in a few rows of cells only (a person at 4-6 m, a
+  // camera low or tilted up): a few cells are enough for a plane, and the rules below,
+  // judged on all cells, tell a floor from level bits of a body or of furniture.
+  floor.setMinInliers (kMinFloorCells);
   pcl::Indices above;
   floor.filter (above);
-  floor_found_ = floor.getFloorFound () && detail::floorSpread (*input_, scan.cell_pixels, floor.getFloorPlane (),
-                                                                 floor_distance_) >= min_floor_spread_;
+  if (floor.getFloorFound ())
+  {
+    // FloorRemoval looks under a plane among its upward-facing sample only; nothing of the
+    // frame may lie under a floor (the upright body under the level top of a shoulder or
+    // forearm does).
+    const detail::FloorExtent extent =
+        detail::floorExtent (*input_, scan.cell_pixels, floor.getFloorPlane (), floor_distance_);
+    floor_found_ = extent.spread >= min_floor_spread_ && 4 * extent.below <= extent.inliers;
+  }
   if (floor_found_)
     floor_plane_ = floor.getFloorPlane ();
 }
@@ -666,7 +714,7 @@ agex::PersonSegmentation<PointT>::placeCells (detail::PersonScan &scan) const
     cell.h = normal.dot (xyz) + offset;
     cell.lat = lateral.dot (xyz);
     cell.fwd = forward.dot (xyz);
-    cell.valid = !scan.with_floor || cell.h >= floorMargin (p.z);
+    cell.valid = !scan.with_floor || cell.h >= floorMargin (scan, p.z, cell.h);
   }
 }
 
@@ -762,7 +810,7 @@ agex::PersonSegmentation<PointT>::measureBins (const detail::PersonScan &scan,
   s.column.assign (nlat, 0);
   std::vector<int> column_first (nlat, scan.cw), column_last (nlat, -1);
   const float base_band = 0.1f;
-  const float crown_drop = crown_drop_ + 2.f * depth_noise_ * s.zMean () * s.zMean ();
+  const float crown_drop = crown_drop_ + 2.f * detail::heightNoise (depth_noise_, s.zMean (), s.top - scan.offset);
   detail::forEachPartCell (scan, parts, [&] (const detail::PersonPart &part, int c, const detail::PersonGridCell &g) {
     const int bl = detail::binIndex (g.lat, s.lat_min, s.bin, nlat);
     const int bf = detail::binIndex (g.fwd, s.fwd_min, s.bin, nfwd);
@@ -1276,6 +1324,24 @@ agex::PersonSegmentation<PointT>::takePixels (const detail::PersonScan &scan,
   for (int k = 0; k < static_cast<int> (people.size ()); ++k)
   {
     const bool bounded = detail::personBlocks (scan, people[k].parts, k, blocks);
+    // The floor where the person stands, from the floor cells among its blocks (the plane
+    // was fitted to the whole floor, and may be a centimetre or two off here): pixels of
+    // the feet above it by more than the height noise are the person's (doc/pipeline.md).
+    blocks.floor_level = 0.f;
+    blocks.levels.clear ();
+    if (scan.with_floor)
+      for (const int c : blocks.cells)
+      {
+        const detail::PersonGridCell &g = scan.grid[c];
+        if (g.pixel >= 0 && !g.valid && std::abs (g.h) < floorMargin (scan, g.z, g.h))
+          blocks.levels.push_back (g.h);
+      }
+    if (blocks.levels.size () >= 3)
+    {
+      const auto middle = blocks.levels.begin () + blocks.levels.size () / 2;
+      std::nth_element (blocks.levels.begin (), middle, blocks.levels.end ());
+      blocks.floor_level = *middle;
+    }
     personPixels (scan, people[k].parts, k, bounded, blocks, labels, pixels[k]);
   }
 }
@@ -1321,8 +1387,19 @@ agex::PersonSegmentation<PointT>::personPixels (const detail::PersonScan &scan,
           if (!(p.z >= lo && p.z <= hi) || labels[i].label != kUnlabelled || !std::isfinite (p.x + p.y) ||
               !(fake_indices_ || scan.selected[i]) || !(p.z > 0.f))
             continue;
-          if (scan.with_floor && scan.normal.dot (p.getVector3fMap ()) + scan.offset < floorMargin (p.z))
-            continue;
+          if (scan.with_floor)
+          {
+            // Below the floor margin only the feet: points above the floor under this
+            // person by more than three times their height noise (and a centimetre),
+            // right under a pixel of the person (the shoe goes on down from the leg; a
+            // noisy bit of the floor beside it does not).
+            const float h = scan.normal.dot (p.getVector3fMap ()) + scan.offset;
+            if (h < floorMargin (scan, p.z, h) &&
+                (h - blocks.floor_level < std::max (kMinFootHeight,
+                                                    3.f * detail::heightNoise (depth_noise_, p.z, h - scan.offset)) ||
+                 !detail::belowPerson (labels, i, width, label)))
+              continue;
+          }
           if (bounded)
           {
             const float lat = scan.lateral.dot (p.getVector3fMap ());

@@ -168,6 +168,10 @@ writeReprojectedDataset (const Dataset &input, const std::vector<std::string> &f
     if (progress)
       progress (f + 1, frame_ids.size ());
   }
+  if (stats.frames_out == 0)
+    throw std::invalid_argument ("dataset re-projection: none of the " + std::to_string (stats.frames_in) + " frames of " +
+                                 input.directory () + " has a person depth (a person image or a labelled 3D point) "
+                                 "to move to a distance; nothing written");
   const auto start = std::chrono::steady_clock::now ();
   writer.commit ();
   stats.write_ms += msSince (start);

@@ -392,7 +392,7 @@ TEST (FrameReprojection, HalfResolutionHalvesThePixelCoordinates)
 }
 
 // The bonn target: a kinect render made into the 144x176 portrait view, in 8-bit depth levels
-// that end at 4.08 m (beyond: nothing, and labels there are hidden), or with the kinect's depth.
+// that end at 4.09 m (beyond: nothing, and labels there are hidden), or with the kinect's depth.
 TEST (FrameReprojection, BonnTargetIsThePortraitViewWithOrWithoutItsDepthLevels)
 {
   const agex::SynthFrame input = render (wallAndBox (), exact640 ());

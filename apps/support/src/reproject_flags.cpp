@@ -83,10 +83,10 @@ parseReprojectFlags (int argc, char **argv, ReprojectFlags &flags)
     ("resolution", po::value (&flags.resolution),
      "target frame size WxH with the sensor's field of view (same aspect ratio; not for bonn)")
     ("bonn-depth-levels", po::value (&options.bonn_depth_levels)->default_value (true),
-     "bonn: store depth in the Bonn frames' 8-bit 1.6 cm levels, which end at 4.08 m (1), or keep the kinect's "
+     "bonn: store depth in the Bonn frames' 8-bit 1.6 cm levels, which end at 4.09 m (1), or keep the kinect's "
      "depth (0)")
     ("seed", po::value (&options.seed)->default_value (options.seed), "random seed; the same seed gives the same bytes")
-    ("source-step-growth", po::value (&options.mesh.depth_step_growth)->default_value (options.mesh.depth_step_growth),
+    ("source-step-growth", po::value (&options.mesh.depth_step_growth)->default_value (options.mesh.depth_step_growth, "0.0029"),
      "the input frames' depth steps in metres per squared metre of depth (a Kinect v1's 0.0029; 0 for exact "
      "depth), 0-0.02: neighbours within 3 steps are one surface")
     ("source-depth-step", po::value (&flags.source_depth_step)->default_value (flags.source_depth_step),

@@ -13,7 +13,7 @@ class BonnSensor
 public:
   /** kinect: the model the frame was rendered with (renderSensorModel (Bonn));
     * bonn: the model of the result (sensorModel (Bonn)). depth_levels false keeps the kinect's
-    * depth (only the view): the Bonn frames' 8-bit levels end at 4.08 m, which a scene moved
+    * depth (only the view): the Bonn frames' 8-bit levels end at 4.09 m, which a scene moved
     * farther away (FrameReprojection) would leave. */
   BonnSensor (const SensorModel &kinect, const SensorModel &bonn, bool depth_levels = true)
     : kinect_ (kinect), bonn_ (bonn), depth_levels_ (depth_levels)

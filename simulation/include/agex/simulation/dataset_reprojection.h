@@ -69,7 +69,8 @@ DatasetInfo reprojectedDatasetInfo (const Dataset &input, const DatasetReproject
   * with ids "<id>_c<k>" in the frame's sequence, with the input's person and part images when
   * it has them, and writes them as an agex dataset atomically (DatasetWriter: staged beside
   * output, renamed into place at the end). progress (done, total) after each frame.
-  * \throws std::invalid_argument for bad options, DatasetError as DatasetWriter, FrameError
+  * \throws std::invalid_argument for bad options or when a distance is asked for and no frame
+  *         has a person depth (nothing is written), DatasetError as DatasetWriter, FrameError
   *         naming a bad frame */
 DatasetReprojectionStats writeReprojectedDataset (const Dataset &input, const std::vector<std::string> &frame_ids,
                                                   const DatasetReprojectionOptions &options, const std::string &output,

@@ -99,7 +99,7 @@ public:
   void setTargetSensor (const SensorModel &model);
   const SensorModel &getTargetSensor () const { return target_; }
   /** Bonn target: store depth in the Bonn frames' 8-bit steps of kBonnDepthStep (default),
-    * which end at 4.08 m; false keeps the kinect's depth in the Bonn view. */
+    * which end at 4.09 m; false keeps the kinect's depth in the Bonn view. */
   void setBonnDepthLevels (bool on) { bonn_depth_levels_ = on; }
   bool getBonnDepthLevels () const { return bonn_depth_levels_; }
   /** A label is hidden when the noise-free rendered depth at its pixel is nearer than the

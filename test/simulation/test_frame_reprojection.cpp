@@ -604,6 +604,26 @@ TEST (DatasetReprojection, WritesMovedCopiesDeterministically)
   EXPECT_EQ (agex_test::readAll (dir.file ("again/persons/a_c0.png")), agex_test::readAll (dir.file ("out/persons/a_c0.png")));
   // An existing output is not replaced without overwrite.
   EXPECT_THROW (agex::writeReprojectedDataset (dataset, {"a"}, options, dir.file ("out"), false), agex::DatasetError);
+
+  // A distance asked for, but no frame has a person depth: nothing is written.
+  agex::DatasetInfo bare = info;
+  bare.person_labels = false;
+  {
+    agex::DatasetWriter writer (dir.file ("bare"), bare);
+    writer.addFrame ("w", "s1", input.cloud, {});
+    writer.commit ();
+  }
+  const agex::Dataset unlabelled = agex::Dataset::read (dir.file ("bare"));
+  EXPECT_THROW (agex::writeReprojectedDataset (unlabelled, {"w"}, options, dir.file ("none"), false),
+                std::invalid_argument);
+  EXPECT_FALSE (agex_test::fs::exists (dir.file ("none")));
+  std::size_t left = 0;
+  for (const auto &entry : agex_test::fs::directory_iterator (dir.path ()))
+    left += entry.path ().filename ().string ().find ("partial") != std::string::npos;
+  EXPECT_EQ (left, 0u);
+  // Without a distance the same frame is only moved sideways.
+  options.min_distance = options.max_distance = 0.0;
+  EXPECT_EQ (agex::writeReprojectedDataset (unlabelled, {"w"}, options, dir.file ("sideways"), false).frames_out, 2u);
 }
 
 // A real Bonn keyframe (sequence 7, person at about 2.3 m, 8-bit depth) moved to 4 m and seen

@@ -16,11 +16,11 @@ check "agex_reproject: no copies" 1 "--copies must be 1-1000, got 0" $R --datase
 check "agex_reproject: an unknown sensor" 1 "unknown --sensor 'nosuch'" $R --dataset in/dataset --output out/rp_f --sensor nosuch
 check "agex_reproject: a resolution for the bonn view" 1 "bonn sensor's frames are its 144x176 portrait view" $R --dataset in/dataset --output out/rp_g --sensor bonn --resolution 320x240
 check "agex_reproject: a source depth step of 1 m" 1 "--source-depth-step must be auto or 0-0.5 metres, got '1'" $R --dataset in/dataset --output out/rp_h --source-depth-step 1
-check "agex_reproject: a missing dataset" 1 "nope.*dataset.json" $R --dataset in/nope --output out/rp_i
+check "agex_reproject: a missing dataset" 1 "in/nope: not a dataset directory" $R --dataset in/nope --output out/rp_i
 check "agex_reproject: an unknown sequence" 1 "has no sequence 'zz'" $R --dataset in/dataset@zz --output out/rp_j
 check "agex_reproject: output inside the input dataset" 1 "output would land inside the input dataset" $R --dataset in/dataset --output in/dataset/moved
-check "agex_reproject --force onto a directory of other things" 1 "notes.txt, which is not part of an agex dataset" $R --dataset in/dataset --output in/reproject_notes --force
+check "agex_reproject --force onto a directory of other things" 1 "reproject_notes: is a directory without an agex dataset.json" $R --dataset in/dataset --output in/reproject_notes --force
 check "agex_reproject: a distance, but no frame has labels or a person image" 1 "has a person depth .* nothing written" $R --dataset in/dataset --output out/rp_k --distance 3
 [ ! -e out/rp_a ] && [ ! -e out/rp_k ] && [ -z "$(ls -a out | grep partial)" ] || { echo "FAILED: a refused agex_reproject left an output" >&2; failures=$((failures + 1)); }
 check "agex_reproject: an all-NaN frame" 0 "1 kinect frames .640x480. from 1 frames" $R --dataset in/ds_all_nan --output out/rp_nan --sideways 0.5
-check "agex_reproject: a frame without labels, moved 2 m back" 0 "1 kinect frames" $R --dataset in/dataset --output out/rp_wall --sideways 0.3 --tilt-deg 5 --vertical 0.2
+check "agex_reproject: a frame without labels, moved sideways, up and tilted" 0 "1 kinect frames" $R --dataset in/dataset --output out/rp_wall --sideways 0.3 --tilt-deg 5 --vertical 0.2

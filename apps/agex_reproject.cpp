@@ -6,12 +6,30 @@
 #include <agex/apps/dataset_selection.h>
 #include <agex/apps/output_guard.h>
 #include <agex/apps/reproject_flags.h>
+#include <agex/filters/person_segmentation.h>
 #include <agex/io/atomic_file.h>
 #include <agex/simulation/dataset_reprojection.h>
 
 #include <algorithm>
 #include <iostream>
 #include <stdexcept>
+#include <vector>
+
+namespace
+{
+/** The floor agex::PersonSegmentation finds in a frame (its defaults: up is -y, within 25
+  * degrees; spread over an area). */
+bool
+findFloor (const pcl::PointCloud<pcl::PointXYZ> &cloud, Eigen::Vector4f &plane)
+{
+  agex::PersonSegmentation<pcl::PointXYZ> segmentation;
+  segmentation.setInputCloud (pcl::PointCloud<pcl::PointXYZ>::ConstPtr (new pcl::PointCloud<pcl::PointXYZ> (cloud)));
+  std::vector<pcl::PointIndices> persons;
+  segmentation.segment (persons);
+  plane = segmentation.getFloorPlane ();
+  return segmentation.getFloorFound ();
+}
+}  // namespace
 
 int
 main (int argc, char **argv)
@@ -32,6 +50,8 @@ main (int argc, char **argv)
     agex::DatasetReprojectionOptions options = flags.options;
     if (flags.source_depth_step_auto)
       options.mesh.depth_quantum = agex::depthQuantumOf (selection.dataset.info ());
+    if (flags.floor == "auto")
+      options.find_floor = findFloor;
     agex::apps::Progress progress ("re-projected", selection.frame_ids.size ());
     const agex::DatasetReprojectionStats stats =
         agex::writeReprojectedDataset (selection.dataset, selection.frame_ids, options, flags.output, flags.force,
@@ -45,6 +65,8 @@ main (int argc, char **argv)
     std::cout << ", " << stats.visible_labels << " of " << stats.labels << " labels visible";
     if (stats.dropped_labels > 0)
       std::cout << ", " << stats.dropped_labels << " left out (no 3D tip, or behind the camera)";
+    if (options.find_floor)
+      std::cout << "; floor found and rendered in " << stats.with_floor << " of " << stats.frames_in << " frames";
     std::cout << "\n  source depth step max(" << options.mesh.depth_quantum << ", " << options.mesh.depth_step_growth
               << " z^2) m; mesh " << stats.mesh_ms / copies << " ms, render " << stats.render_ms / copies
               << " ms, write " << stats.write_ms / copies << " ms per frame on one thread\n";

@@ -92,6 +92,8 @@ reprojectedDatasetInfo (const Dataset &input, const DatasetReprojectionOptions &
     << " sensor model (" << info.width << "x" << info.height << ", fx " << info.intrinsics.fx << ")";
   if (options.sensor.sensor == SynthSensor::Bonn)
     p << (options.bonn_depth_levels ? " in 8-bit depth levels" : " with the kinect's depth (no 8-bit levels)");
+  p << (options.find_floor ? "; each frame's floor (where found) rendered as a plane beyond what the frame shows"
+                           : "; only what the frames show (no floor added)");
   p << "; seed " << options.seed << "; labels hidden when something is nearer than "
     << options.label_tolerance << " m in front of them (doc/apps/agex_reproject.md); source provenance: "
     << in.provenance;
@@ -135,6 +137,14 @@ writeReprojectedDataset (const Dataset &input, const std::vector<std::string> &f
         progress (f + 1, frame_ids.size ());
       continue;
     }
+    Eigen::Vector4f floor;
+    if (options.find_floor && options.find_floor (*cloud, floor))
+    {
+      reprojection.setFloorPlane (floor);
+      ++stats.with_floor;
+    }
+    else
+      reprojection.clearFloorPlane ();
     reprojection.setInputCloud (cloud);
     reprojection.setLabels (labels);
     reprojection.setPersonImage (persons);

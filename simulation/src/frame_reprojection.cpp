@@ -105,6 +105,16 @@ FrameReprojection::setTargetSensor (const SensorModel &model)
 }
 
 void
+FrameReprojection::setFloorPlane (const Eigen::Vector4f &plane)
+{
+  const float norm = plane.head<3> ().norm ();
+  if (!plane.allFinite () || !(norm > 1e-6f))
+    throw std::invalid_argument ("FrameReprojection: the floor plane needs a finite, non-zero normal and offset");
+  floor_ = plane / norm;
+  has_floor_ = true;
+}
+
+void
 FrameReprojection::setLabelTolerance (double metres)
 {
   checkSetting (metres, 0.001, 1.0, "label tolerance (metres)");
@@ -132,6 +142,19 @@ FrameReprojection::compute (ReprojectedFrame &output) const
   if (input_)
     scene = depthFrameScene (*input_, mesh_, persons_, parts_, &output.mesh);
   scene = scene.transformed (move_.transform ());
+  // The floor goes with a scene the camera sees some of: an empty frame, or one moved behind
+  // the camera, stays empty.
+  bool in_front = false;
+  for (const SynthPrimitive &p : scene.primitives)
+  {
+    Eigen::Vector3d centre;
+    double radius = 0.0;
+    in_front = in_front || (p.boundingSphere (centre, radius) && centre.z () + radius > target_.min_range);
+  }
+  if (has_floor_ && in_front)
+    scene.primitives.push_back (
+        SynthPrimitive::plane (floor_.head<3> ().cast<double> (), -static_cast<double> (floor_[3]), SynthObject::Floor)
+            .transformed (move_.transform ()));
   output.mesh_ms = msSince (start);
 
   start = std::chrono::steady_clock::now ();

@@ -255,6 +255,65 @@ TEST (FrameReprojection, SilhouettesAreNotBridged)
   EXPECT_NEAR (static_cast<double> (box_after), expected, 0.03 * expected);
 }
 
+// A floor 1 m below the camera with a box on it, moved 2 m back: without the floor plane the
+// bottom of the frame (floor nearer than the recording saw) is empty; with it, those pixels show
+// the floor at its exact depth, the recorded surfaces still show, and the box's labels stay
+// visible. An empty frame, or one moved behind the camera, stays empty with a floor plane.
+TEST (FrameReprojection, FloorPlaneFillsTheFloorTheRecordingDidNotSee)
+{
+  agex::SynthScene room;
+  room.primitives.push_back (agex::SynthPrimitive::plane (-Eigen::Vector3d::UnitY (), -1.0, agex::SynthObject::Floor));
+  room.primitives.push_back (agex::SynthPrimitive::plane (Eigen::Vector3d::UnitZ (), 6.0, agex::SynthObject::Wall));
+  room.primitives.push_back (agex::SynthPrimitive::box (Eigen::Vector3d (0, 0.7, 3.0), 0.3 * Eigen::Matrix3d::Identity (),
+                                                        agex::SynthObject::Clutter));
+  const agex::SynthFrame input = render (room, exact640 ());
+  agex::FrameReprojection reprojection;
+  reprojection.setInputCloud (shared (input.cloud));
+  reprojection.setLabels ({labelAt (Eigen::Vector3f (0.0f, 0.4f, 2.7f))});
+  reprojection.setTargetSensor (exact640 ());
+  agex::ReprojectionMove move;
+  move.dz = 2.0;
+  reprojection.setMove (move);
+  agex::ReprojectedFrame bare, floored;
+  reprojection.compute (bare);
+  // n.p + d = height above the floor: up is -y, the camera 1 m above it.
+  reprojection.setFloorPlane (Eigen::Vector4f (0.0f, -2.0f, 0.0f, 2.0f));
+  EXPECT_TRUE (reprojection.hasFloorPlane ());
+  reprojection.compute (floored);
+  std::size_t bottom_bare = 0, bottom_floored = 0, off_plane = 0, changed = 0;
+  for (int v = 440; v < 480; ++v)
+    for (int u = 0; u < 640; ++u)
+    {
+      bottom_bare += std::isfinite (bare.cloud (u, v).z);
+      const pcl::PointXYZ &p = floored.cloud (u, v);
+      bottom_floored += std::isfinite (p.z);
+      off_plane += std::isfinite (p.z) && std::abs (p.y - 1.0f) > 1e-3f;
+    }
+  for (std::size_t i = 0; i < bare.cloud.points.size (); ++i)
+    changed += std::isfinite (bare.cloud.points[i].z) && std::abs (bare.cloud.points[i].z - floored.cloud.points[i].z) > 1e-3f;
+  EXPECT_EQ (bottom_bare, 0u);
+  EXPECT_EQ (bottom_floored, 40u * 640u);
+  EXPECT_EQ (off_plane, 0u);
+  EXPECT_EQ (changed, 0u) << "the recorded surfaces show where they are";
+  ASSERT_EQ (floored.labels.size (), 1u);
+  EXPECT_TRUE (floored.labels[0].visible);
+
+  move.dz = -10.0;
+  reprojection.setMove (move);
+  agex::ReprojectedFrame behind;
+  reprojection.compute (behind);
+  EXPECT_EQ (validPixels (behind.cloud), 0u);
+  reprojection.setInputCloud (Cloud::Ptr (new Cloud (640, 480, pcl::PointXYZ (kNaN, kNaN, kNaN))));
+  reprojection.setMove (agex::ReprojectionMove ());
+  agex::ReprojectedFrame empty;
+  reprojection.compute (empty);
+  EXPECT_EQ (validPixels (empty.cloud), 0u);
+  reprojection.clearFloorPlane ();
+  EXPECT_FALSE (reprojection.hasFloorPlane ());
+  EXPECT_THROW (reprojection.setFloorPlane (Eigen::Vector4f (0.0f, 0.0f, 0.0f, 1.0f)), std::invalid_argument);
+  EXPECT_THROW (reprojection.setFloorPlane (Eigen::Vector4f (0.0f, kNaN, 0.0f, 1.0f)), std::invalid_argument);
+}
+
 // The person moved 1 m back: the median depth of its pixels grows by 1 m and their number
 // shrinks by about (z / (z + 1))^2, with the exact sensor and with the Kinect model.
 TEST (FrameReprojection, OneMetreBackShrinksThePersonByTheSquareOfTheDepthRatio)
@@ -570,8 +629,16 @@ TEST (DatasetReprojection, WritesMovedCopiesDeterministically)
   options.copies = 2;
   options.seed = 11;
   options.mesh.depth_quantum = agex::depthQuantumOf (dataset.info ());
+  int floors_asked = 0;
+  options.find_floor = [&floors_asked] (const Cloud &, Eigen::Vector4f &plane) {
+    ++floors_asked;
+    plane = Eigen::Vector4f (0.0f, -1.0f, 0.0f, 1.2f);
+    return floors_asked == 1;  // the first frame has one, the second not
+  };
   const agex::DatasetReprojectionStats stats =
       agex::writeReprojectedDataset (dataset, {"b", "a"}, options, dir.file ("out"), false);
+  EXPECT_EQ (floors_asked, 2);
+  EXPECT_EQ (stats.with_floor, 1u);
   EXPECT_EQ (stats.frames_in, 2u);
   EXPECT_EQ (stats.frames_out, 4u);
   EXPECT_EQ (stats.skipped, 0u);
@@ -599,6 +666,8 @@ TEST (DatasetReprojection, WritesMovedCopiesDeterministically)
   EXPECT_GT (std::abs (distances[0] - distances[1]), 1e-3);
   EXPECT_GT (z0, 1.5);
 
+  // Frame a had no floor in the first run: the same again gives the same bytes.
+  options.find_floor = [] (const Cloud &, Eigen::Vector4f &) { return false; };
   agex::writeReprojectedDataset (dataset, {"a"}, options, dir.file ("again"), false);
   EXPECT_EQ (agex_test::readAll (dir.file ("again/frames/a_c1.pcd")), agex_test::readAll (dir.file ("out/frames/a_c1.pcd")));
   EXPECT_EQ (agex_test::readAll (dir.file ("again/persons/a_c0.png")), agex_test::readAll (dir.file ("out/persons/a_c0.png")));
@@ -626,9 +695,10 @@ TEST (DatasetReprojection, WritesMovedCopiesDeterministically)
   EXPECT_EQ (agex::writeReprojectedDataset (unlabelled, {"w"}, options, dir.file ("sideways"), false).frames_out, 2u);
 }
 
-// A real Bonn keyframe (sequence 7, person at about 2.3 m, 8-bit depth) moved to 4 m and seen
-// by the Kinect model: the person is still there, its pixels scaled by (z0 / 4)^2 within 30%,
-// its median depth at 4 m, and most labels still visible.
+// A real Bonn keyframe (sequence 7, person at about 2.3 m, 8-bit depth) moved to 4 m with its
+// floor and seen by the Kinect model: the person is still there, its pixels scaled by
+// (z0 / 4)^2 within 30%, its median depth at 4 m, found by PersonSegmentation, and its labels
+// still visible.
 TEST (FrameReprojectionReal, BonnKeyframeMovedToFourMetres)
 {
   const std::string png = agex_test::sharedData ("bonn/depth/7/022.png");
@@ -679,6 +749,8 @@ TEST (FrameReprojectionReal, BonnKeyframeMovedToFourMetres)
   move.dz = 4.0 - agex::FrameReprojection::personMedianDepth (*frame.cloud, labels, persons);
   reprojection.setMove (move);
   reprojection.setTargetSensor (agex::sensorModel (agex::SynthSensor::Kinect));
+  ASSERT_TRUE (segmentation.getFloorFound ());
+  reprojection.setFloorPlane (segmentation.getFloorPlane ());
   agex::ReprojectedFrame out;
   reprojection.compute (out);
   double z1 = 0.0;
@@ -686,6 +758,16 @@ TEST (FrameReprojectionReal, BonnKeyframeMovedToFourMetres)
   const double expected = n0 * std::pow (z0 / 4.0, 2.0);
   EXPECT_NEAR (static_cast<double> (n1), expected, 0.3 * expected) << "z0 " << z0 << " m, " << n0 << " pixels";
   EXPECT_NEAR (z1, 4.0, 0.1);
+  // PersonSegmentation finds the moved person on its own, on the floor, at 4 m, with about
+  // the pixels the carried person image has.
+  agex::PersonSegmentation<pcl::PointXYZ> moved;
+  moved.setInputCloud (Cloud::Ptr (new Cloud (out.cloud)));
+  std::vector<pcl::PointIndices> found_moved;
+  moved.segment (found_moved);
+  ASSERT_EQ (found_moved.size (), 1u);
+  EXPECT_TRUE (moved.getFloorFound ());
+  EXPECT_NEAR (moved.getPersons ()[0].distance, 4.0, 0.2);
+  EXPECT_NEAR (static_cast<double> (found_moved[0].indices.size ()), static_cast<double> (n1), 0.15 * n1);
   const auto visible_in = std::count_if (labels.begin (), labels.end (), [] (const agex::PartLabel &l) { return l.visible; });
   const auto visible_out =
       std::count_if (out.labels.begin (), out.labels.end (), [] (const agex::PartLabel &l) { return l.visible; });

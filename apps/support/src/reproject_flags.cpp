@@ -85,6 +85,9 @@ parseReprojectFlags (int argc, char **argv, ReprojectFlags &flags)
     ("bonn-depth-levels", po::value (&options.bonn_depth_levels)->default_value (true),
      "bonn: store depth in the Bonn frames' 8-bit 1.6 cm levels, which end at 4.09 m (1), or keep the kinect's "
      "depth (0)")
+    ("floor", po::value (&flags.floor)->default_value (flags.floor),
+     "auto: find each frame's floor and render it as a plane, so that a scene moved away stands on a floor "
+     "reaching to the camera, as a camera there would see it; none: only what the frames show")
     ("seed", po::value (&options.seed)->default_value (options.seed), "random seed; the same seed gives the same bytes")
     ("source-step-growth", po::value (&options.mesh.depth_step_growth)->default_value (options.mesh.depth_step_growth, "0.0029"),
      "the input frames' depth steps in metres per squared metre of depth (a Kinect v1's 0.0029; 0 for exact "
@@ -154,6 +157,8 @@ parseReprojectFlags (int argc, char **argv, ReprojectFlags &flags)
                                 "'");
     options.mesh.depth_quantum = step;
   }
+  if (flags.floor != "auto" && flags.floor != "none")
+    throw std::runtime_error ("--floor must be auto or none, got '" + flags.floor + "'");
   options.validate ();
   return true;
 }

@@ -16,6 +16,7 @@ check "agex_reproject: no copies" 1 "--copies must be 1-1000, got 0" $R --datase
 check "agex_reproject: an unknown sensor" 1 "unknown --sensor 'nosuch'" $R --dataset in/dataset --output out/rp_f --sensor nosuch
 check "agex_reproject: a resolution for the bonn view" 1 "bonn sensor's frames are its 144x176 portrait view" $R --dataset in/dataset --output out/rp_g --sensor bonn --resolution 320x240
 check "agex_reproject: a source depth step of 1 m" 1 "--source-depth-step must be auto or 0-0.5 metres, got '1'" $R --dataset in/dataset --output out/rp_h --source-depth-step 1
+check "agex_reproject: an unknown floor choice" 1 "--floor must be auto or none, got 'plane'" $R --dataset in/dataset --output out/rp_l --floor plane
 check "agex_reproject: a missing dataset" 1 "in/nope: not a dataset directory" $R --dataset in/nope --output out/rp_i
 check "agex_reproject: an unknown sequence" 1 "has no sequence 'zz'" $R --dataset in/dataset@zz --output out/rp_j
 check "agex_reproject: output inside the input dataset" 1 "output would land inside the input dataset" $R --dataset in/dataset --output in/dataset/moved

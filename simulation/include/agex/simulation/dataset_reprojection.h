@@ -6,6 +6,11 @@
 #include <agex/io/dataset.h>
 #include <agex/simulation/frame_reprojection.h>
 
+#include <pcl/point_cloud.h>
+#include <pcl/point_types.h>
+
+#include <Eigen/Core>
+
 #include <cstddef>
 #include <cstdint>
 #include <functional>
@@ -33,6 +38,10 @@ struct DatasetReprojectionOptions
   /** The source frames' surfaces (depthQuantumOf gives the quantum of a dataset's frames). */
   DepthMeshSettings mesh;
   double label_tolerance = 0.05;  ///< metres (FrameReprojection::setLabelTolerance)
+  /** Finds a frame's floor (n.p + d = height above it, FrameReprojection::setFloorPlane);
+    * false for none. Empty (the default): no floor plane, only what the frames show.
+    * agex_reproject passes agex::PersonSegmentation's floor (a module this one does not link). */
+  std::function<bool (const pcl::PointCloud<pcl::PointXYZ> &cloud, Eigen::Vector4f &plane)> find_floor;
 
   /** \throws std::invalid_argument naming the first setting out of range */
   void validate () const;
@@ -58,6 +67,7 @@ struct DatasetReprojectionStats
     * person image nor a labelled 3D point). */
   std::size_t skipped = 0;
   std::size_t labels = 0, visible_labels = 0, dropped_labels = 0;
+  std::size_t with_floor = 0;  ///< input frames whose floor was found and rendered (find_floor)
   double mesh_ms = 0.0, render_ms = 0.0, write_ms = 0.0;  ///< totals over the copies
 };
 

@@ -13,6 +13,7 @@
 
 #include <opencv2/core/mat.hpp>
 
+#include <Eigen/Core>
 #include <Eigen/Geometry>
 
 #include <cstddef>
@@ -106,6 +107,18 @@ public:
     * label by more than this, metres, 0.001-1 (default 0.05, as the synthetic labels). */
   void setLabelTolerance (double metres);
   double getLabelTolerance () const { return label_tolerance_; }
+  /** \brief Also renders the frame's floor as an endless plane, in the input's camera frame:
+    * n.p + d = height above the floor (as agex::FloorRemoval::getFloorPlane returns it; n
+    * normalised here). Moved back, a frame then shows the floor between the camera and the
+    * scene and beside it, where the recording saw none, as a camera there would: without it
+    * the moved scene floats in an empty frame and a floor finder sees only the patch of floor
+    * the recording held. Where the frame's own surfaces are, they show (the plane lies in the
+    * recorded floor). \throws std::invalid_argument for a plane without a finite normal */
+  void setFloorPlane (const Eigen::Vector4f &plane);
+  /** No floor plane (the default): only what the frame shows. */
+  void clearFloorPlane () { has_floor_ = false; }
+  bool hasFloorPlane () const { return has_floor_; }
+  const Eigen::Vector4f &getFloorPlane () const { return floor_; }
   /** The target sensor's noise is drawn from this seed: the same seed gives the same frame. */
   void setSeed (std::uint64_t seed) { seed_ = seed; }
   std::uint64_t getSeed () const { return seed_; }
@@ -141,6 +154,8 @@ private:
   bool bonn_depth_levels_ = true;
   double label_tolerance_ = 0.05;
   std::uint64_t seed_ = 1;
+  bool has_floor_ = false;
+  Eigen::Vector4f floor_ = Eigen::Vector4f::Zero ();
 };
 
 /** \brief A sensor that measures the exact depth of each pixel-centre ray: a time-of-flight

@@ -21,6 +21,9 @@ struct ReprojectFlags
   /** The source frames' fixed depth step: "auto" (depthQuantumOf the dataset) or metres. */
   std::string source_depth_step = "auto";
   bool source_depth_step_auto = true;
+  /** "auto": each frame's floor found (agex::PersonSegmentation) and rendered as a plane;
+    * "none": only what the frames show. */
+  std::string floor = "auto";
 };
 
 /** \brief Parses agex_reproject's command line into flags and checks every value's range.

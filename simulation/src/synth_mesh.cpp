@@ -12,6 +12,10 @@ namespace
 {
 constexpr int kLeafSize = 4;
 constexpr double kInf = std::numeric_limits<double>::infinity ();
+/** How far (in barycentric units) a triangle reaches beyond its edges: a ray through a vertex
+  * or an edge that triangles share must not slip between them by rounding (a frame meshed
+  * through its pixel centres is hit by rays through its vertices: FrameReprojection). */
+constexpr double kEdgeSlack = 1e-9;
 
 /** Entry and exit of a ray (inverse direction given) through a box; false if missed. */
 bool
@@ -184,11 +188,11 @@ SynthMesh::intersect (const Eigen::Vector3d &o, const Eigen::Vector3d &d, double
       const double inv_det = 1.0 / det;
       const Eigen::Vector3d s = o - a;
       const double u = s.dot (p) * inv_det;
-      if (u < 0.0 || u > 1.0)
+      if (u < -kEdgeSlack || u > 1.0 + kEdgeSlack)
         continue;
       const Eigen::Vector3d q = s.cross (e1);
       const double v = d.dot (q) * inv_det;
-      if (v < 0.0 || u + v > 1.0)
+      if (v < -kEdgeSlack || u + v > 1.0 + kEdgeSlack)
         continue;
       const double hit = e2.dot (q) * inv_det;
       if (hit > t_min && hit < best)

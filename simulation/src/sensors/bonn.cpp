@@ -21,7 +21,7 @@ BonnSensor::apply (SynthFrame &frame) const
 {
   const float nan = std::numeric_limits<float>::quiet_NaN ();
   const CameraIntrinsics &k = kinect_.intrinsics;
-  for (int v = 0; v < kinect_.height; ++v)
+  for (int v = 0; depth_levels_ && v < kinect_.height; ++v)
     for (int u = 0; u < kinect_.width; ++u)
     {
       pcl::PointXYZ &p = frame.cloud (u, v);

@@ -5,6 +5,8 @@
 //   mesh_tip_survival bonn BONN_DIR [SCALE ...]        keyframes, each SCALE a view of the
 //                                                      whole 640x480 frame (1, 0.5, ...)
 //   mesh_tip_survival synth FRAMES SEED [WxH ...]      procedural poses, kinect sensor
+//   --set KEY=VALUE (anywhere, repeatable)             a pipeline setting (model key, JSON
+//                                                      value) changed for every run
 //
 // For each resolution and part it prints the fraction of labelled tips with a mesh point
 // within 5 cm, and the same with one cleaning stage turned off at a time (which stage
@@ -14,6 +16,8 @@
 #include <agex/io/bonn.h>
 #include <agex/io/frame_io.h>
 #include <agex/simulation/synthetic_scene.h>
+
+#include <nlohmann/json.hpp>
 
 #include <pcl/point_cloud.h>
 #include <pcl/point_types.h>
@@ -44,11 +48,16 @@ struct Variant
   agex::DepthPipelineParams params;
 };
 
+/** Settings changed from the defaults for every run (--set key=value, model keys). */
+nlohmann::json g_overrides = nlohmann::json::object ();
+
 std::vector<Variant>
 variants ()
 {
   std::vector<Variant> all;
-  const agex::DepthPipelineParams defaults;
+  nlohmann::json doc = agex::DepthPipelineParams ().toJson ();
+  doc.merge_patch (g_overrides);
+  const agex::DepthPipelineParams defaults = agex::DepthPipelineParams::fromJson (doc, "--set");
   all.push_back ({"defaults", defaults});
   auto p = defaults;
   p.remove_mixed_pixels = false;
@@ -61,7 +70,8 @@ variants ()
   all.push_back ({"no spurs", p});
   p = defaults;
   p.min_mesh_size = 1;
-  all.push_back ({"mesh >= 1", p});
+  p.min_mesh_area = 0.f;
+  all.push_back ({"any mesh", p});
   p.remove_mixed_pixels = false;
   p.median_window = 0;
   p.spur_iterations = 0;
@@ -83,6 +93,8 @@ struct Tally
   std::map<std::string, std::map<agex::BodyPart, std::pair<int, int>>> hits;  // variant -> part -> (hit, all)
   std::map<agex::BodyPart, std::pair<int, int>> person;
   std::map<std::string, double> ms;
+  std::map<std::string, double> stage_ms_;  ///< the first variant's, per stage
+  std::size_t meshes_ = 0;                   ///< the first variant's
   int frames = 0;
 
   void add (const Cloud::Ptr &cloud, const std::vector<Tip> &tips, const std::vector<Variant> &all)
@@ -92,6 +104,12 @@ struct Tally
     {
       const agex::DepthPipelineResult r = agex::runDepthPipeline (cloud, variant.params);
       ms[variant.name] += r.ms.back ().second;
+      if (&variant == &all.front ())
+      {
+        for (const auto &[stage, stage_ms] : r.ms)
+          stage_ms_[stage] += stage_ms;
+        meshes_ += r.meshes.size ();
+      }
       const std::vector<int> surface = r.meshIndices ();
       std::vector<int> people;
       for (const auto &p : r.persons)
@@ -132,6 +150,11 @@ struct Tally
     for (const auto &variant : all)
       row (variant.name, hits.at (variant.name), ms.at (variant.name));
     row ("person px", person, -1);
+    std::printf ("  %s ms per stage:", all.front ().name.c_str ());
+    for (const auto &[stage, total] : stage_ms_)
+      std::printf (" %s %.2f", stage.c_str (), total / std::max (1, frames));
+    std::printf ("\n  %s meshes per frame: %.2f\n", all.front ().name.c_str (),
+                 static_cast<double> (meshes_) / std::max (1, frames));
     for (const auto &variant : all)
     {
       const auto &h = hits.at (variant.name);
@@ -186,6 +209,80 @@ bonn (int argc, char **argv)
                      std::to_string (static_cast<int> (480 * scale)),
                  all);
   }
+  return 0;
+}
+
+/** Debug: ASCII maps around the hand tips of one Bonn frame at one scale: the erosion layer
+  * of each person pixel (1-9, + deeper), and what the default spur filter keeps. */
+int
+debug (int argc, char **argv)
+{
+  const std::string root = argv[2], seq = argv[3], fr = argv[4];
+  const double scale = std::stod (argv[5]);
+  const agex::Frame frame = agex::loadFrame (root + "/depth/" + seq + "/" + fr + ".png");
+  agex::FrameView view;
+  view.width = static_cast<int> (frame.cloud->width);
+  view.height = static_cast<int> (frame.cloud->height);
+  view.scale = scale;
+  Cloud::Ptr cloud (new Cloud);
+  agex::applyView (*frame.cloud, view, *cloud);
+  auto params = variants ().front ().params;
+  auto off = params;
+  off.spur_iterations = 0;
+  const auto before = agex::runDepthPipeline (cloud, off);
+  const auto after = agex::runDepthPipeline (cloud, params);
+  std::vector<int> layer (cloud->size (), 0);
+  pcl::IndicesPtr pts (new pcl::Indices);
+  for (std::size_t i = 0; i < cloud->size (); ++i)
+    if (std::isfinite ((*before.filtered)[i].z))
+      pts->push_back (static_cast<int> (i));
+  for (int n = 1; n <= 9; ++n)
+  {
+    agex::SpurFilter<pcl::PointXYZ> f;
+    f.setInputCloud (before.filtered);
+    f.setIndices (pts);
+    f.setIterations (n);
+    f.setDeltaConnected (params.delta_connected);
+    f.setDeltaConnectedGrowth (1.5f * params.depth_step_growth);
+    pcl::Indices kept;
+    f.filter (kept);
+    std::vector<char> k (cloud->size (), 0);
+    for (const auto i : kept)
+      k[i] = 1;
+    for (const auto i : *pts)
+      if (!k[i] && layer[i] == 0)
+        layer[i] = n;
+  }
+  const auto labels = agex::readBonnLabels (root + "/labels.csv");
+  const int w = static_cast<int> (cloud->width);
+  std::printf ("focal %g, median window %d\n", after.focal_length, after.median_window);
+  for (const auto &l : labels)
+    if (l.sequence == seq && l.frame == fr && l.part == agex::BodyPart::Hand)
+    {
+      const int tu = static_cast<int> (l.tip_px.x () * scale), tv = static_cast<int> (l.tip_px.y () * scale);
+      std::printf ("hand %d tip at (%d, %d): layers (+ deeper than 9), lower case = removed by the default filter\n",
+                   l.instance, tu, tv);
+      for (int v = std::max (0, tv - 14); v < std::min<int> (cloud->height, tv + 15); ++v)
+      {
+        for (int u = std::max (0, tu - 20); u < std::min (w, tu + 21); ++u)
+        {
+          const int i = v * w + u;
+          char c = '.';
+          if (std::isfinite ((*before.filtered)[i].z))
+          {
+            const int t = layer[i];
+            const bool kept = std::isfinite ((*after.filtered)[i].z);
+            c = t == 0 ? '+' : static_cast<char> ('0' + t);
+            if (!kept)
+              c = t == 0 ? '*' : static_cast<char> ('a' + t - 1);
+          }
+          if (u == tu && v == tv)
+            c = 'X';
+          std::putchar (c);
+        }
+        std::putchar ('\n');
+      }
+    }
   return 0;
 }
 
@@ -251,11 +348,31 @@ main (int argc, char **argv)
 {
   try
   {
+    // --set key=value (a pipeline model key and a JSON value) anywhere after the mode.
+    std::vector<char *> rest;
+    for (int a = 0; a < argc; ++a)
+    {
+      const std::string arg = argv[a];
+      if (arg == "--set" && a + 1 < argc)
+      {
+        const std::string kv = argv[++a];
+        const auto eq = kv.find ('=');
+        if (eq == std::string::npos)
+          throw std::runtime_error ("--set needs key=value, got " + kv);
+        g_overrides[kv.substr (0, eq)] = nlohmann::json::parse (kv.substr (eq + 1));
+      }
+      else
+        rest.push_back (argv[a]);
+    }
+    argc = static_cast<int> (rest.size ());
+    argv = rest.data ();
     const std::string mode = argc > 1 ? argv[1] : "";
     if (mode == "bonn")
       return bonn (argc, argv);
     if (mode == "synth")
       return synth (argc, argv);
+    if (mode == "debug")
+      return debug (argc, argv);
     std::cerr << "usage: mesh_tip_survival bonn BONN_DIR [SCALE ...] | synth FRAMES SEED [WxH ...]\n";
     return 2;
   }

@@ -218,12 +218,15 @@ int
 debug (int argc, char **argv)
 {
   const std::string root = argv[2], seq = argv[3], fr = argv[4];
-  const double scale = std::stod (argv[5]);
+  const std::string scale_arg = argv[5];
   const agex::Frame frame = agex::loadFrame (root + "/depth/" + seq + "/" + fr + ".png");
   agex::FrameView view;
   view.width = static_cast<int> (frame.cloud->width);
   view.height = static_cast<int> (frame.cloud->height);
-  view.scale = scale;
+  if (scale_arg == "portrait")
+    view = agex::bonnPortraitView ();
+  else
+    view.scale = std::stod (scale_arg);
   Cloud::Ptr cloud (new Cloud);
   agex::applyView (*frame.cloud, view, *cloud);
   auto params = variants ().front ().params;
@@ -257,12 +260,14 @@ debug (int argc, char **argv)
   const int w = static_cast<int> (cloud->width);
   std::printf ("focal %g, median window %d\n", after.focal_length, after.median_window);
   for (const auto &l : labels)
-    if (l.sequence == seq && l.frame == fr && l.part == agex::BodyPart::Hand)
+    if (l.sequence == seq && l.frame == fr &&
+        l.part == (std::getenv ("AGEX_PART") ? agex::BodyPart::Head : agex::BodyPart::Hand))
     {
-      const int tu = static_cast<int> (l.tip_px.x () * scale), tv = static_cast<int> (l.tip_px.y () * scale);
+      const auto q = view.toView (cv::Point2f (l.tip_px.x (), l.tip_px.y ()));
+      const int tu = static_cast<int> (q.x), tv = static_cast<int> (q.y);
       std::printf ("hand %d tip at (%d, %d): layers (+ deeper than 9), lower case = removed by the default filter\n",
                    l.instance, tu, tv);
-      for (int v = std::max (0, tv - 14); v < std::min<int> (cloud->height, tv + 15); ++v)
+      for (int v = std::max (0, tv - 4); v < std::min<int> (cloud->height, tv + 25); ++v)
       {
         for (int u = std::max (0, tu - 20); u < std::min (w, tu + 21); ++u)
         {
@@ -283,6 +288,83 @@ debug (int argc, char **argv)
         std::putchar ('\n');
       }
     }
+  return 0;
+}
+
+/** Debug: per keyframe, AGEX_5 head distance; with a frame named, an ASCII map. */
+int
+agexDebug (int argc, char **argv)
+{
+  const std::string root = argv[2];
+  const double scale = std::stod (argv[3]);
+  const std::string only = argc > 4 ? argv[4] : "";
+  const auto labels = agex::readBonnLabels (root + "/labels.csv");
+  std::map<std::pair<std::string, std::string>, std::vector<agex::BonnLabel>> keyframes;
+  for (const auto &l : labels)
+    if (l.keyframe)
+      keyframes[{l.sequence, l.frame}].push_back (l);
+  auto params = variants ().front ().params;
+  params.k = 6;
+  for (const auto &[key, fl] : keyframes)
+  {
+    const std::string name = key.first + "/" + key.second;
+    if (!only.empty () && name != only)
+      continue;
+    const agex::Frame frame = agex::loadFrame (root + "/depth/" + key.first + "/" + key.second + ".png");
+    agex::FrameView view;
+    view.width = 640;
+    view.height = 480;
+    view.scale = scale;
+    Cloud::Ptr cloud (new Cloud);
+    agex::applyView (*frame.cloud, view, *cloud);
+    const auto r = agex::runDepthPipeline (cloud, params);
+    for (const auto &l : fl)
+    {
+      if (l.part != agex::BodyPart::Head)
+        continue;
+      Eigen::Vector3f tip;
+      if (!agex::liftPixelToSurface (*frame.cloud, l.tip_px.x (), l.tip_px.y (), 6, 0.05f, tip))
+        continue;
+      double best = 1e9;
+      for (const auto &p : r.interest_points)
+        if (p.rank >= 2 && p.rank <= 6)
+          best = std::min<double> (best, (p.getVector3fMap () - tip).norm ());
+      std::printf ("%s head %.1f cm%s\n", name.c_str (), best * 100, best > 0.1 ? "  MISS" : "");
+      if (!only.empty ())
+      {
+        const int w = static_cast<int> (cloud->width);
+        std::vector<char> m (cloud->size (), ' ');
+        for (std::size_t i = 0; i < cloud->size (); ++i)
+          if (std::isfinite ((*cloud)[i].z))
+            m[i] = '.';
+        for (std::size_t k = 0; k < r.meshes.size (); ++k)
+          for (const auto i : r.meshes[k].indices)
+            m[i] = static_cast<char> ('0' + k);
+        for (const auto &p : r.interest_points)
+          m[p.v * w + p.u] = static_cast<char> ('A' + p.rank - 1);
+        const int tu = static_cast<int> (l.tip_px.x () * scale), tv = static_cast<int> (l.tip_px.y () * scale);
+        m[tv * w + tu] = 'X';
+        const int step = scale > 0.6 ? 2 : 1;
+        for (int v = 0; v < static_cast<int> (cloud->height); v += step)
+        {
+          std::string line;
+          for (int u = static_cast<int> (w * 0.3); u < static_cast<int> (w * 0.75); u += step)
+          {
+            char c = m[v * w + u];
+            for (int dv = 0; dv < step; ++dv)
+              for (int du = 0; du < step; ++du)
+              {
+                const char o = m[(v + dv) * w + u + du];
+                if ((o >= 'A' && o <= 'Z'))
+                  c = o;
+              }
+            line += c;
+          }
+          std::printf ("%s\n", line.c_str ());
+        }
+      }
+    }
+  }
   return 0;
 }
 
@@ -373,6 +455,8 @@ main (int argc, char **argv)
       return synth (argc, argv);
     if (mode == "debug")
       return debug (argc, argv);
+    if (mode == "agex")
+      return agexDebug (argc, argv);
     std::cerr << "usage: mesh_tip_survival bonn BONN_DIR [SCALE ...] | synth FRAMES SEED [WxH ...]\n";
     return 2;
   }

@@ -173,7 +173,7 @@ expectHeadAndFeetAmongAgex5 (const PipelineParams &settings, const std::string &
     }
     EXPECT_EQ (checked, 3) << "head and two feet labelled";
     std::cout << report.str () << "\n";
-    RecordProperty ("distances_" + std::to_string (key.sequence) + "_" + key.frame, report.str ());
+    ::testing::Test::RecordProperty ("distances_" + std::to_string (key.sequence) + "_" + key.frame, report.str ());
   }
 }
 

@@ -102,6 +102,8 @@ private:
   float halfMinWidth (float z) const;
   /** layer_ -> thick_ for the points of alive: the local thickness (see the class comment). */
   void localThickness (const std::vector<int> &alive, int top, int width);
+  /** Keeps the points between a limb's kept middle and the eroded part it grows from. */
+  void joinCores (const std::vector<int> &alive, int width);
 
   int min_connected_ = 6;
   int iterations_ = 3;

@@ -69,6 +69,88 @@ agex::SpurFilter<PointT>::localThickness (const std::vector<int> &alive, int top
   }
 }
 
+/** Joins the kept middles of limbs to the parts they grow out of: where a limb grows out
+  * of a wider part, its middle lies within that part's erosion (the layers rise from the
+  * limb's to the part's) and would come apart from it. From the middles of limbs long enough
+  * to matter (a middle's points, kept by their width and not deeper than their erosion, of
+  * at least twice the minimum width squared as the camera sees them: not a bump on an edge)
+  * the points up to what the erosion keeps are kept: a neighbour not kept, of a deeper
+  * layer, or of the same layer from the top of a ridge (no deeper neighbour), with at most
+  * half the minimum width of steps along a layer (reach_ holds 1 + those steps, 0: not
+  * reached). */
+template <typename PointT> void
+agex::SpurFilter<PointT>::joinCores (const std::vector<int> &alive, int width)
+{
+  const auto &cloud = *input_;
+  const auto middle = [&] (int i) {
+    const float z = cloud[i].z;
+    return kept_[i] && layer_[i] <= erosionLayers (z) && layer_[i] >= halfMinWidth (z);
+  };
+  // The middles, as connected pieces: thick_ marks them (its widths are used up by now).
+  std::vector<int> climb, piece;
+  const double per_pixel = 1.0 / (static_cast<double> (focal_length_) * focal_length_);
+  const double least = 2.0 * static_cast<double> (min_width_) * min_width_;
+  for (const int i : alive)
+  {
+    reach_[i] = 0;
+    thick_[i] = 0;
+  }
+  for (const int seed : alive)
+  {
+    if (thick_[seed] || !middle (seed))
+      continue;
+    piece.assign (1, seed);
+    thick_[seed] = 1;
+    double area = 0.0;
+    for (std::size_t head = 0; head < piece.size (); ++head)
+    {
+      const int c = piece[head];
+      area += static_cast<double> (cloud[c].z) * cloud[c].z * per_pixel;
+      const int u = c % width, v = c / width;
+      for (int d = 0; d < 8; ++d)
+        if (edges_[c] & (1u << d))
+        {
+          const int j = (v + kAllNeighbours[d][1]) * width + u + kAllNeighbours[d][0];
+          if (!thick_[j] && middle (j))
+          {
+            thick_[j] = 1;
+            piece.push_back (j);
+          }
+        }
+    }
+    if (area >= least)
+      for (const int c : piece)
+      {
+        reach_[c] = 1;
+        climb.push_back (c);
+      }
+  }
+  for (std::size_t head = 0; head < climb.size (); ++head)
+  {
+    const int c = climb[head];
+    const int along = reach_[c] - 1;
+    const int most = static_cast<int> (std::ceil (halfMinWidth (cloud[c].z)));
+    const int u = c % width, v = c / width;
+    bool top = true;
+    for (int d = 0; d < 8 && top; ++d)
+      if (edges_[c] & (1u << d))
+        top = layer_[(v + kAllNeighbours[d][1]) * width + u + kAllNeighbours[d][0]] <= layer_[c];
+    for (int d = 0; d < 8; ++d)
+      if (edges_[c] & (1u << d))
+      {
+        const int j = (v + kAllNeighbours[d][1]) * width + u + kAllNeighbours[d][0];
+        if (layer_[j] < layer_[c] || (layer_[j] == layer_[c] && !top) || (kept_[j] && reach_[j] == 0))
+          continue;  // down, along a side, or kept already (deeper than the erosion, or a middle)
+        const int steps = along + (layer_[j] == layer_[c] ? 1 : 0);
+        if (steps > most || (reach_[j] != 0 && reach_[j] <= steps + 1))
+          continue;
+        reach_[j] = static_cast<unsigned char> (steps + 1);
+        kept_[j] = 1;
+        climb.push_back (j);
+      }
+  }
+}
+
 template <typename PointT> void
 agex::SpurFilter<PointT>::applyFilter (pcl::Indices &indices)
 {
@@ -209,6 +291,8 @@ agex::SpurFilter<PointT>::applyFilter (pcl::Indices &indices)
       }
       kept[i] = remove ? 0 : 1;
     }
+    if (widths)
+      joinCores (alive, width);
   }
 
   for (const auto i : *indices_)

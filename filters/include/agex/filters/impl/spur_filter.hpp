@@ -34,9 +34,25 @@ agex::SpurFilter<PointT>::halfMinWidth (float z) const
 template <typename PointT> void
 agex::SpurFilter<PointT>::localThickness (const std::vector<int> &alive, int top, int width)
 {
+  // Points the erosion never reached (most of a body) start only where they border a
+  // shallower layer: inside, their searches reach nothing new.
   std::vector<std::vector<int>> by_layer (static_cast<std::size_t> (top) + 1);
   for (const int i : alive)
-    by_layer[std::min<int> (layer_[i], top)].push_back (i);
+  {
+    const int layer = std::min<int> (layer_[i], top);
+    if (layer == top)
+    {
+      thick_[i] = static_cast<unsigned char> (top);
+      bool inside = true;
+      const int u = i % width, v = i / width;
+      for (int d = 0; d < 8 && inside; ++d)
+        if (edges_[i] & (1u << d))
+          inside = layer_[(v + kAllNeighbours[d][1]) * width + u + kAllNeighbours[d][0]] >= top;
+      if (inside)
+        continue;
+    }
+    by_layer[static_cast<std::size_t> (layer)].push_back (i);
+  }
   std::vector<int> queue;
   for (int r = top; r >= 1; --r)
   {

@@ -125,7 +125,8 @@ describe (const std::vector<MeshSummary> &meshes)
 }
 
 /** Each mesh of a has its counterpart in b (the nearest centroid, within 5 cm): the same
-  * person, the area within 15%; and as many meshes. */
+  * person, the area within 15%; and as many meshes. (Labelled 640x480 and 320x240, b may be
+  * another camera.) */
 void
 expectSameMeshes (const std::vector<MeshSummary> &a, const std::vector<MeshSummary> &b)
 {
@@ -155,7 +156,7 @@ meshPointNear (const PipelineResult &result, const Eigen::Vector3f &p, float rad
 // ---------------------------------------------------------------------------
 // (a) One scene, two resolutions of one camera, the same meshes.
 
-TEST (MetricPipeline, AFigureGivesTheSameMeshesAt640x480And320x240)
+TEST (MetricPipeline, AFigureGivesTheSameMeshesAt640x480And320x240AndOnA512x424Camera)
 {
   const auto figures = bodyBeforeAWall ();
   const PipelineResult full = agex::runDepthPipeline (rasterise (figures, kinectCamera (640, 480)), figureSettings ());
@@ -165,6 +166,16 @@ TEST (MetricPipeline, AFigureGivesTheSameMeshesAt640x480And320x240)
   const auto a = summarise (full), b = summarise (half);
   ASSERT_FALSE (a.empty ());
   expectSameMeshes (a, b);
+  // A Kinect v2's 512x424 (f = 366, a wider view) sees the same figure: the same meshes.
+  Camera v2;
+  v2.width = 512;
+  v2.height = 424;
+  v2.fx = v2.fy = 366.0;
+  v2.cx = 255.5;
+  v2.cy = 211.5;
+  const PipelineResult wide = agex::runDepthPipeline (rasterise (figures, v2), figureSettings ());
+  EXPECT_NEAR (wide.focal_length, 366.f, 0.5f);
+  expectSameMeshes (a, summarise (wide));
   // The limbs survive, joined to the disc: one mesh.
   EXPECT_EQ (a.size (), 1u) << describe (a);
 

@@ -20,17 +20,19 @@ namespace agex
   * - **In pixels** (focal length 0, the default): setIterations() passes; every part
   *   narrower than twice that many pixels goes entirely.
   * - **In metres** (setFocalLength > 0): each point is judged at its own depth z, where a
-  *   pixel spans z / f metres. The erosion takes setErosionDepth() metres off the edges
+  *   pixel spans z / f. The erosion takes setErosionDepth() metres off the edges
   *   (round (depth f / z) passes; 0: setIterations() passes), and with setMinWidth() > 0 a
   *   part's width decides, not the erosion alone: a strand narrower than the minimum width
   *   goes entirely, and a part at least that wide keeps at least that width around its
   *   middle (the erosion stops there), so a forearm stays a forearm at any resolution and
-  *   distance while hair strands and one-pixel spurs go. A point's width is its local
-  *   thickness: the largest erosion depth t(q) of a point q whose square of side 2 t(q) - 1,
-  *   measured along connected neighbours, reaches it (about half the width of the part it
-  *   lies in, in passes); the point goes when that width, about 2 t(q) - 0.5 pixels, is
-  *   below the minimum, or when it lies within the erosion depth and outside the middle
-  *   minimum width of its part.
+  *   distance while hair strands and one-pixel spurs go. A point's width is the deepest
+  *   erosion layer r whose point reaches it going down the layers, at least one layer per
+  *   step (about 2 r - 0.5 pixels wide): a part's middle reaches its own sides, not those of
+  *   a narrower part beyond it. A point goes when that width is below the minimum, or when
+  *   it lies within the erosion depth and outside the middle minimum width of its part. The
+  *   middle of a limb (at least twice the minimum width squared in area, as the camera sees
+  *   it), where the limb grows out of a wider part, lies within that part's erosion: the
+  *   points from it up the layers to what the erosion keeps stay, so the limb stays joined.
   *
   * PCL conventions as in pcl::PassThrough: non-finite points are always removed,
   * setNegative, setKeepOrganized, getRemovedIndices and setIndices (only those

@@ -467,7 +467,9 @@ TEST (MetricSettings, BundledModelsRunTheirPixelSettings)
     EXPECT_EQ (p.spur_min_width, 0.f);
     EXPECT_EQ (p.min_mesh_area, 0.f);
     if (model.settings ().kind == agex::DetectorKind::SlidingWindow)
+    {
       EXPECT_GE (model.settings ().sliding_window.stride, 1);
+    }
   }
 }
 }  // namespace

@@ -47,9 +47,13 @@ DepthPipelineParams::validate (const Namer &name) const
 {
   // Ranges wide enough for any sensor and scene, tight enough that no setting can make one
   // frame take minutes or gigabytes.
-  checkRange (name, "median_window", median_window, 0, 31);
+  checkRange (name, "median_window", median_window, -1, 31);  // -1: from median_extent
+  checkRange (name, "median_extent", median_extent, 0, 0.1);
   checkRange (name, "median_max_movement", median_max_movement, 0, 1);
-  checkRange (name, "mixed_window_radius", mixed_window_radius, 1, 31);
+  if (mixed_window_radius == 0)  // -1: from mixed_window_angle
+    throw std::invalid_argument (name ("mixed_window_radius") + " is 0, neither -1 (by the focal length) nor in [1, 31]");
+  checkRange (name, "mixed_window_radius", mixed_window_radius, -1, 31);
+  checkRange (name, "mixed_window_angle", mixed_window_angle, 0, 0.05, true);
   checkRange (name, "mixed_min_jump", mixed_min_jump, 0, 1, true);
   checkRange (name, "mixed_max_veil_angle_deg", mixed_max_veil_angle_deg, 0, 90, true, true);
   checkVector (name, "crop_min", crop_min, 1000);
@@ -65,9 +69,11 @@ DepthPipelineParams::validate (const Namer &name) const
   checkRange (name, "spur_min_connected", spur_min_connected, 0, 8);
   checkRange (name, "spur_iterations", spur_iterations, -1, 64);  // -1: auto
   checkRange (name, "spur_depth", spur_depth, 0, 0.5, true);
+  checkRange (name, "spur_min_width", spur_min_width, 0, 0.3);
   checkRange (name, "delta_connected", delta_connected, 0, 0.3, true);
   checkRange (name, "depth_step_growth", depth_step_growth, 0, 0.02);
   checkRange (name, "min_mesh_size", min_mesh_size, -1, 1e8);  // -1: auto
+  checkRange (name, "min_mesh_area", min_mesh_area, 0, 10);
   checkRange (name, "k", k, 1, 200);
   checkRange (name, "delta_orient", delta_orient, 0, 1);
 }
@@ -83,9 +89,11 @@ DepthPipelineParams::toJson () const
 {
   auto vec = [] (const Eigen::Vector3f &v) { return nlohmann::json::array ({v.x (), v.y (), v.z ()}); };
   return {{"median_window", median_window},
+          {"median_extent", median_extent},
           {"median_max_movement", median_max_movement},
           {"remove_mixed_pixels", remove_mixed_pixels},
           {"mixed_window_radius", mixed_window_radius},
+          {"mixed_window_angle", mixed_window_angle},
           {"mixed_min_jump", mixed_min_jump},
           {"mixed_max_veil_angle_deg", mixed_max_veil_angle_deg},
           {"isolate_people", isolate_people},
@@ -101,9 +109,11 @@ DepthPipelineParams::toJson () const
           {"spur_min_connected", spur_min_connected},
           {"spur_iterations", spur_iterations},
           {"spur_depth", spur_depth},
+          {"spur_min_width", spur_min_width},
           {"delta_connected", delta_connected},
           {"depth_step_growth", depth_step_growth},
           {"min_mesh_size", min_mesh_size},
+          {"min_mesh_area", min_mesh_area},
           {"k", k},
           {"delta_orient", delta_orient}};
 }
@@ -148,10 +158,18 @@ DepthPipelineParams::fromJson (const nlohmann::json &doc, const std::string &sou
   };
   // Wide bounds here only keep the narrowing safe; validate () applies the real ranges.
   constexpr double kWide = 1e9;
+  // The metric settings (doc/pipeline.md, "Metric settings"): a model written before them
+  // keeps its pixel settings (its median_window and mixed_window_radius are pixels) and
+  // neither the spur width rule nor a mesh area (0).
+  const auto optional = [&] (const char *key, float before) {
+    return doc.contains (key) ? static_cast<float> (number (key, -kWide, kWide)) : before;
+  };
   q.median_window = integer ("median_window", -kWide, kWide);
+  q.median_extent = optional ("median_extent", q.median_extent);
   q.median_max_movement = static_cast<float> (number ("median_max_movement", -kWide, kWide));
   q.remove_mixed_pixels = boolean ("remove_mixed_pixels");
   q.mixed_window_radius = integer ("mixed_window_radius", -kWide, kWide);
+  q.mixed_window_angle = optional ("mixed_window_angle", q.mixed_window_angle);
   q.mixed_min_jump = static_cast<float> (number ("mixed_min_jump", -kWide, kWide));
   q.mixed_max_veil_angle_deg = static_cast<float> (number ("mixed_max_veil_angle_deg", -kWide, kWide));
   // Models of agex 0.1 know no people: their crop box isolated the person.
@@ -168,10 +186,12 @@ DepthPipelineParams::fromJson (const nlohmann::json &doc, const std::string &sou
   q.spur_min_connected = integer ("spur_min_connected", -kWide, kWide);
   q.spur_iterations = integer ("spur_iterations", -kWide, kWide);
   q.spur_depth = static_cast<float> (number ("spur_depth", -kWide, kWide));
+  q.spur_min_width = optional ("spur_min_width", 0.f);
   q.delta_connected = static_cast<float> (number ("delta_connected", -kWide, kWide));
   // Earlier models used fixed thresholds at every depth.
   q.depth_step_growth = doc.contains ("depth_step_growth") ? static_cast<float> (number ("depth_step_growth", -kWide, kWide)) : 0.f;
   q.min_mesh_size = integer ("min_mesh_size", -kWide, kWide);
+  q.min_mesh_area = optional ("min_mesh_area", 0.f);
   q.k = integer ("k", -kWide, kWide);
   q.delta_orient = static_cast<float> (number ("delta_orient", -kWide, kWide));
   q.validate (name);

@@ -57,9 +57,12 @@ DetectorSettings::validate (const std::function<std::string (const std::string &
   }
   if (kind == DetectorKind::SlidingWindow)
   {
-    if (sliding_window.stride < 1 || sliding_window.stride > 64)
+    if (sliding_window.stride != -1 && (sliding_window.stride < 1 || sliding_window.stride > 64))
       throw std::invalid_argument (name ("sliding_window.stride") + " is " + std::to_string (sliding_window.stride) +
-                                   ", outside [1, 64] pixels");
+                                   ", outside [1, 64] pixels (-1: sliding_window.stride_metres)");
+    if (!(sliding_window.stride_metres > 0.f && sliding_window.stride_metres <= 0.5f))
+      throw std::invalid_argument (name ("sliding_window.stride_metres") + " is " +
+                                   formatNumber (sliding_window.stride_metres) + ", outside (0, 0.5] metres");
     if (sliding_window.scales.empty () || sliding_window.scales.size () > 16)
       throw std::invalid_argument (name ("sliding_window.scales") + " must hold 1 to 16 scales");
     for (const float s : sliding_window.scales)
@@ -76,7 +79,9 @@ DetectorSettings::toJson () const
                         {"suppression_radius", suppression_radius},
                         {"pipeline", pipeline.toJson ()}};
   if (kind == DetectorKind::SlidingWindow)
-    doc["sliding_window"] = {{"stride", sliding_window.stride}, {"scales", sliding_window.scales}};
+    doc["sliding_window"] = {{"stride", sliding_window.stride},
+                             {"scales", sliding_window.scales},
+                             {"stride_metres", sliding_window.stride_metres}};
   if (kind == DetectorKind::Fused)
     doc["fused"] = {{"merge_radius", fused.merge_radius},
                     {"min_mode_confidence", fused.min_mode_confidence},
@@ -128,7 +133,15 @@ DetectorSettings::fromJson (const nlohmann::json &doc, const std::string &source
         !w["scales"].is_array () || w["scales"].size () > 16)
       throw std::invalid_argument (name ("sliding_window") + " must hold an integer stride and up to 16 scales");
     const auto stride = w["stride"].get<long long> ();
-    s.sliding_window.stride = stride < 0 || stride > 1000 ? 0 : static_cast<int> (stride);
+    s.sliding_window.stride = stride < -1 || stride > 1000 ? 0 : static_cast<int> (stride);
+    // Models written before it have a pixel stride and no stride_metres.
+    if (w.contains ("stride_metres"))
+    {
+      if (!w["stride_metres"].is_number ())
+        throw std::invalid_argument (name ("sliding_window.stride_metres") + " must be a number");
+      const double metres = w["stride_metres"].get<double> ();
+      s.sliding_window.stride_metres = std::isfinite (metres) && std::abs (metres) < 1e6 ? static_cast<float> (metres) : -1.f;
+    }
     s.sliding_window.scales.clear ();
     for (const auto &scale : w["scales"])
     {

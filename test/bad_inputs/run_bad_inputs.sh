@@ -182,7 +182,7 @@ check "batch JSON lines onto a file that is not a batch result" 1 "notes.txt: li
 check "a directory without frames" 1 "no_frames: no frames" $D in/no_frames --json out/none.jsonl
 check "a frame one row high" 1 "one_row_100x1.u16: a 100x1 image; a depth frame needs at least 2 rows" $K in/one_row_100x1.u16 --width 100 --height 1
 check "a NaN focal length" 1 "--fy must be a focal length of" $K in/frame.png --fy nan
-check "a median window of 100000 pixels" 1 "--median-window is 100000, outside \\[0, 31\\]" $K in/frame.png --median-window 100000
+check "a median window of 100000 pixels" 1 "--median-window is 100000, outside \\[-1, 31\\]" $K in/frame.png --median-window 100000
 # Reruns find their frames however the input is spelled; more jobs than frames is fine.
 check "agex_detect rerun as ./in/batch/" 0 "60 frames already in" $D ./in/batch/ $SR --json out/batch.jsonl
 [ "$(wc -l < out/batch.jsonl)" = 60 ] || { echo "FAILED: the respelled rerun added lines" >&2; failures=$((failures + 1)); }

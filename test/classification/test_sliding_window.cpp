@@ -184,6 +184,48 @@ TEST (SlidingWindowDetector, FindsAPlantedPart)
     EXPECT_GT ((d.position - f.tip3D (0)).norm (), 0.2f);
 }
 
+TEST (SlidingWindowDetector, StrideInMetresFollowsTheFocalLengthAndDepth)
+{
+  // 8 cm between window centres at the figure's 2.1 m: 3.8 pixels at f = 100 (stride 4), 1.9
+  // at f = 50 (stride 2), the same windows on the figure at both resolutions.
+  const Figure f = figureAt (0.12, 0.2, 2.1);
+  for (const double scale : {1.0, 0.5})
+  {
+    Camera cam = kCamera;
+    cam.fx *= scale, cam.fy *= scale;
+    cam.width = static_cast<int> (cam.width * scale), cam.height = static_cast<int> (cam.height * scale);
+    cam.cx = (cam.width - 1) / 2.0, cam.cy = (cam.height - 1) / 2.0;
+    agex::SlidingWindowDetector<pcl::PointXYZ> detector;
+    detector.setInputCloud (agex_test::rasterise ({f}, cam));
+    detector.setClassifier (tipClassifier ());
+    detector.setStrideMetres (0.08f);
+    detector.setSuppressionRadius (0.f);
+    std::vector<agex::WindowDetection> detections;
+    ASSERT_TRUE (detector.detect (detections));
+    const int expected = static_cast<int> (std::lround (0.08 * cam.fx / 2.1));
+    EXPECT_EQ (detector.getUsedStride (), expected) << "f = " << cam.fx;
+    ASSERT_FALSE (detections.empty ());
+    for (const auto &d : detections)
+    {
+      EXPECT_EQ (d.u % expected, 0);
+      EXPECT_EQ (d.v % expected, 0);
+    }
+  }
+  // Without metres the pixel stride, and a negative or NaN stride in metres is refused.
+  agex_test::QuietPcl quiet;
+  agex::SlidingWindowDetector<pcl::PointXYZ> detector;
+  detector.setInputCloud (agex_test::rasterise ({f}, kCamera));
+  detector.setClassifier (tipClassifier ());
+  std::vector<agex::WindowDetection> detections;
+  ASSERT_TRUE (detector.detect (detections));
+  EXPECT_EQ (detector.getUsedStride (), 3);
+  for (const float bad : {-0.01f, std::nanf ("")})
+  {
+    detector.setStrideMetres (bad);
+    EXPECT_FALSE (detector.detect (detections));
+  }
+}
+
 TEST (SlidingWindowDetector, BadInputIsReportedNotCrashed)
 {
   agex_test::QuietPcl quiet;

@@ -120,6 +120,62 @@ TEST (DepthMedianFilter, SameCloudAsPclMedianFilter)
   EXPECT_GT (clamped, 50);
 }
 
+TEST (DepthMedianFilter, SampleSpacingIsTheMedianOfTheSubsampledFrame)
+{
+  // With samples s pixels apart, the median at (u, v) is the plain median, at (u / s, v / s),
+  // of the frame's pixels (u mod s + s i, v mod s + s j): the same depths bit for bit.
+  int compared = 0;
+  for (unsigned seed : {4u, 5u})
+  {
+    const Cloud::Ptr input = randomFrame (29, 22, seed);
+    for (const int spacing : {2, 3})
+      for (const int window : {3, 5})
+      {
+        Median median;
+        median.setInputCloud (input);
+        median.setWindowSize (window);
+        median.setSampleSpacing (spacing);
+        median.setMaxAllowedMovement (0.05f);
+        median.setKeepOnViewingRay (false);
+        Cloud spaced;
+        median.filter (spaced);
+        ASSERT_EQ (spaced.size (), input->size ());
+        for (int phase_v = 0; phase_v < spacing; ++phase_v)
+          for (int phase_u = 0; phase_u < spacing; ++phase_u)
+          {
+            const int w = (static_cast<int> (input->width) - phase_u + spacing - 1) / spacing;
+            const int h = (static_cast<int> (input->height) - phase_v + spacing - 1) / spacing;
+            Cloud::Ptr sub (new Cloud (w, h));
+            for (int j = 0; j < h; ++j)
+              for (int i = 0; i < w; ++i)
+                (*sub) (i, j) = (*input) (phase_u + spacing * i, phase_v + spacing * j);
+            const Cloud expected = agexMedian (sub, window, 0.05f, false);
+            for (int j = 0; j < h; ++j)
+              for (int i = 0; i < w; ++i)
+              {
+                const auto &a = expected (i, j), &b = spaced (phase_u + spacing * i, phase_v + spacing * j);
+                EXPECT_EQ (bits (a.z), bits (b.z)) << "spacing " << spacing << " window " << window << " at ("
+                                                   << phase_u + spacing * i << ", " << phase_v + spacing * j << ")";
+                compared += std::isfinite (a.z);
+              }
+          }
+      }
+  }
+  EXPECT_GT (compared, 3000);
+  // A spacing outside 1-kMaxSpacing is refused.
+  QuietPcl quiet;
+  Median median;
+  median.setInputCloud (randomFrame (10, 10, 1));
+  median.setWindowSize (3);
+  Cloud out;
+  for (const int bad : {0, -1, Median::kMaxSpacing + 1})
+  {
+    median.setSampleSpacing (bad);
+    median.filter (out);
+    EXPECT_TRUE (out.empty ()) << bad;
+  }
+}
+
 /** A width x height cloud with the given depths (NaN: an invalid pixel) on x = y = 0. */
 Cloud::Ptr
 depthCloud (int width, int height, const std::vector<float> &depths)

@@ -831,6 +831,205 @@ TEST (SpurFilter, UnorganizedEmptyAllNanOrBadParametersGiveEmptyOutput)
 
 namespace
 {
+// ---------------------------------------------------------------------------
+// 5b. SpurFilter in metres: the same metric scene at two resolutions of one camera
+
+/** A body seen at depth z by a camera of focal length f (pixels) and an image of the
+  * camera's field of view at that resolution (640x480 at f = 525, 320x240 at 262.5): a
+  * 0.4 m x 0.5 m block with a 6 cm wide, 30 cm long limb going right from its middle, a
+  * one-pixel and a two-pixel wide strand going up 15 cm from its top, and single-pixel spurs
+  * on its bottom edge every 10 pixels. */
+struct MetricBody
+{
+  Camera cam;
+  double z;
+  Cloud::Ptr cloud;
+  std::vector<int> strands, spurs;
+  // Metric layout (x right, y down, metres at depth z).
+  static constexpr double kLeft = -0.3, kRight = 0.1, kTop = -0.25, kBottom = 0.25;
+  static constexpr double kLimbHalf = 0.03, kLimbEnd = 0.4;
+
+  MetricBody (double f, double depth) : z (depth)
+  {
+    cam.fx = cam.fy = f;
+    cam.width = static_cast<int> (std::lround (640 * f / 525.0));
+    cam.height = static_cast<int> (std::lround (480 * f / 525.0));
+    cam.cx = (cam.width - 1) / 2.0;
+    cam.cy = (cam.height - 1) / 2.0;
+    cloud = nanCloud (cam.width, cam.height);
+    for (int v = 0; v < cam.height; ++v)
+      for (int u = 0; u < cam.width; ++u)
+      {
+        const double x = metricX (u), y = metricY (v);
+        const bool block = x >= kLeft && x <= kRight && y >= kTop && y <= kBottom;
+        const bool limb = x > kRight && x <= kLimbEnd && std::abs (y) <= kLimbHalf;
+        if (block || limb)
+          (*cloud) (u, v) = rayPoint (cam, u, v, z);
+      }
+    // The block's first row, and the first row below it.
+    const int top = rowOf (kTop), below = static_cast<int> (std::floor (kBottom * f / z + cam.cy)) + 1;
+    const int strand_length = static_cast<int> (std::lround (0.15 * f / z));
+    for (const auto &[first, width] : std::vector<std::pair<int, int>>{{columnOf (-0.2), 1}, {columnOf (-0.05), 2}})
+      for (int v = top - strand_length; v < top; ++v)
+        for (int u = first; u < first + width; ++u)
+          add (u, v, strands);
+    for (int u = columnOf (kLeft) + 10; u < columnOf (kRight) - 5; u += 10)
+      add (u, below, spurs);
+  }
+  double metricX (int u) const { return (u - cam.cx) / cam.fx * z; }
+  double metricY (int v) const { return (v - cam.cy) / cam.fy * z; }
+  /** The first column / row at or past a metric x / y. */
+  int columnOf (double x) const { return static_cast<int> (std::ceil (x * cam.fx / z + cam.cx)); }
+  int rowOf (double y) const { return static_cast<int> (std::ceil (y * cam.fy / z + cam.cy)); }
+  void add (int u, int v, std::vector<int> &set)
+  {
+    ASSERT_TRUE (u >= 0 && v >= 0 && u < cam.width && v < cam.height);
+    (*cloud) (u, v) = rayPoint (cam, u, v, z);
+    set.push_back (v * cam.width + u);
+  }
+};
+
+std::vector<int>
+metricSpurKept (const MetricBody &body, float min_width, float erosion_depth = 0.035f)
+{
+  Spur filter;
+  filter.setInputCloud (body.cloud);
+  filter.setDeltaConnected (0.03f);
+  filter.setFocalLength (static_cast<float> (body.cam.fx));
+  filter.setErosionDepth (erosion_depth);
+  filter.setMinWidth (min_width);
+  pcl::Indices kept;
+  filter.filter (kept);
+  return sorted (kept);
+}
+
+TEST (SpurFilter, InMetresStrandsGoAndAThinLimbStaysAtBothResolutions)
+{
+  for (const double f : {525.0, 262.5})
+  {
+    const MetricBody body (f, 2.5);
+    const double pixel = body.z / f;  // metres a pixel spans at the body's depth
+    SCOPED_TRACE ("f = " + std::to_string (f) + " px, " + std::to_string (body.cam.width) + "x" +
+                  std::to_string (body.cam.height) + ", a pixel is " + std::to_string (pixel * 1000) + " mm");
+    const std::vector<int> kept = metricSpurKept (body, 0.03f);
+    const auto is_kept = [&kept] (int i) { return std::binary_search (kept.begin (), kept.end (), i); };
+    // One- and two-pixel strands and one-pixel spurs go, whatever a pixel spans.
+    for (const int i : body.strands)
+      EXPECT_FALSE (is_kept (i)) << "strand pixel (" << i % body.cam.width << ", " << i / body.cam.width << ")";
+    for (const int i : body.spurs)
+      EXPECT_FALSE (is_kept (i)) << "spur pixel (" << i % body.cam.width << ", " << i / body.cam.width << ")";
+    // The limb stays along its length, its middle at least 2.5 cm wide (the 3 cm minimum
+    // width, less a pixel's rounding) and narrower than it was (eroded towards it). Its base
+    // goes with the block's edge: within the erosion depth of the block's edge the limb's
+    // points lie on the block's layers, and the block is wide (at either resolution the
+    // first 3.5-4 cm; the limb is then a mesh of its own).
+    int limb_columns = 0, kept_columns = 0;
+    for (int u = body.columnOf (MetricBody::kRight + 0.045); body.metricX (u) <= MetricBody::kLimbEnd - 0.03; ++u)
+    {
+      ++limb_columns;
+      int width = 0, whole = 0;
+      for (int v = 0; v < body.cam.height; ++v)
+      {
+        const int i = v * body.cam.width + u;
+        whole += isFinite ((*body.cloud)[i]);
+        width += is_kept (i);
+      }
+      kept_columns += width > 0;
+      if (std::abs (body.metricX (u) - 0.25) < pixel)
+      {
+        EXPECT_GE (width * pixel, 0.025) << "kept width in the limb's middle";
+        EXPECT_LT (width, whole) << "the limb's sides are eroded";
+      }
+    }
+    EXPECT_GT (limb_columns, 0);
+    EXPECT_EQ (kept_columns, limb_columns) << "columns of the limb with a point kept";
+    // The block's edge loses the erosion depth (3.5 cm) and no more: along its middle row,
+    // the first kept pixel from the left lies 3.5 cm (rounded to pixels) inside.
+    const int row = body.rowOf (0.15);
+    int first = -1;
+    for (int u = 0; u < body.cam.width && first < 0; ++u)
+      if (is_kept (row * body.cam.width + u))
+        first = u;
+    ASSERT_GE (first, 0);
+    EXPECT_NEAR ((first - body.columnOf (MetricBody::kLeft)) * pixel, 0.035, pixel);
+
+    // Control: the plain erosion of the same depth takes the limb whole (it is narrower
+    // than twice 3.5 cm), at both resolutions.
+    const std::vector<int> plain = metricSpurKept (body, 0.f);
+    for (int u = body.columnOf (MetricBody::kRight + 0.05); body.metricX (u) <= MetricBody::kLimbEnd; ++u)
+      for (int v = 0; v < body.cam.height; ++v)
+        EXPECT_FALSE (std::binary_search (plain.begin (), plain.end (), v * body.cam.width + u))
+            << "plain erosion kept limb pixel (" << u << ", " << v << ")";
+  }
+}
+
+TEST (SpurFilter, InMetresWithoutAMinWidthEachDepthGetsItsPasses)
+{
+  // Two 30x30 squares 0.2 m apart in depth (no connection between them): at f = 500 and
+  // 0.02 m of erosion, the near one (2 m) is eroded round (0.02 * 500 / 2) = 5 passes, the
+  // far one (5 m) 2 passes, exactly as the pixel erosion with those passes does.
+  Camera cam;
+  cam.width = 80;
+  cam.height = 40;
+  cam.fx = cam.fy = 500.0;
+  cam.cx = 39.5;
+  cam.cy = 19.5;
+  const auto square = [&cam] (int u0, double z) {
+    Cloud::Ptr cloud = nanCloud (cam.width, cam.height);
+    for (int v = 5; v < 35; ++v)
+      for (int u = u0; u < u0 + 30; ++u)
+        (*cloud) (u, v) = rayPoint (cam, u, v, z);
+    return cloud;
+  };
+  const Cloud::Ptr near = square (5, 2.0), far = square (45, 5.0);
+  Cloud::Ptr both (new Cloud (*near));
+  for (std::size_t i = 0; i < both->size (); ++i)
+    if (isFinite ((*far)[i]))
+      (*both)[i] = (*far)[i];
+  std::vector<int> expected = spurKept (near, 5), far_kept = spurKept (far, 2);
+  expected.insert (expected.end (), far_kept.begin (), far_kept.end ());
+  Spur filter;
+  filter.setInputCloud (both);
+  filter.setFocalLength (500.f);
+  filter.setErosionDepth (0.02f);
+  pcl::Indices kept;
+  filter.filter (kept);
+  EXPECT_EQ (sorted (kept), sorted (expected));
+  EXPECT_EQ (filter.getPassesRun (), 5);
+  // A zero erosion depth falls back to setIterations () passes everywhere.
+  filter.setErosionDepth (0.f);
+  filter.setIterations (3);
+  filter.filter (kept);
+  std::vector<int> three = spurKept (near, 3), far_three = spurKept (far, 3);
+  three.insert (three.end (), far_three.begin (), far_three.end ());
+  EXPECT_EQ (sorted (kept), sorted (three));
+}
+
+TEST (SpurFilter, InMetresBadParametersGiveEmptyOutput)
+{
+  QuietPcl quiet;
+  const MetricBody body (262.5, 2.5);
+  EXPECT_FALSE (metricSpurKept (body, 0.03f).empty ()) << "control";
+  for (const auto &[focal, depth, width] : std::vector<std::tuple<float, float, float>>{
+           {-1.f, 0.035f, 0.03f}, {nanf_ (), 0.035f, 0.03f}, {262.5f, -0.01f, 0.03f}, {262.5f, 0.035f, nanf_ ()},
+           {0.f, 0.035f, 0.03f}})  // a minimum width needs a focal length
+  {
+    SCOPED_TRACE ("focal " + std::to_string (focal) + ", depth " + std::to_string (depth) + ", width " +
+                  std::to_string (width));
+    Spur filter;
+    filter.setInputCloud (body.cloud);
+    filter.setFocalLength (focal);
+    filter.setErosionDepth (depth);
+    filter.setMinWidth (width);
+    pcl::Indices kept{1, 2};
+    filter.filter (kept);
+    EXPECT_TRUE (kept.empty ());
+  }
+}
+}  // namespace
+
+namespace
+{
 /** A slanted plane at about 4.5 m as a structured-light camera sees it: depth in steps of
   * 0.0029 z^2 (6 cm), so neighbours across a step are 6 cm apart in depth. */
 Cloud::Ptr

@@ -481,7 +481,10 @@ compareDetectors (const DatasetSelection &selection, const std::string &agex_mod
   doc["agex"]["model"] = agex_model_path;
   doc["sliding_window"] = sw_side.report ();
   doc["sliding_window"]["model"] = sw_model_path;
-  doc["sliding_window"]["stride_px"] = sw_settings.sliding_window.stride;
+  if (sw_settings.sliding_window.stride > 0)
+    doc["sliding_window"]["stride_px"] = sw_settings.sliding_window.stride;
+  else
+    doc["sliding_window"]["stride_metres"] = sw_settings.sliding_window.stride_metres;
   doc["sliding_window"]["scales"] = sw_settings.sliding_window.scales;
   if (fused_detector)
   {

@@ -116,16 +116,22 @@ pipelineOptionsDescription (DepthPipelineParams &p, std::vector<std::string> &st
      "connectivity and the mixed-pixel jump grow with them")
     ("delta-orient", floatValue (&p.delta_orient),
      "geodesic distance traced back for orientations, metres")
-    ("min-mesh-size", po::value (&p.min_mesh_size)->default_value (p.min_mesh_size, "auto"),
-     "smallest mesh in points; auto: 0.1% of the frame's pixels")
+    ("min-mesh-size", po::value (&p.min_mesh_size)->default_value (p.min_mesh_size),
+     "smallest mesh in points; -1: 0.1% of the frame's pixels")
+    ("min-mesh-area", floatValue (&p.min_mesh_area),
+     "smallest mesh in square metres as the camera sees it (0: none)")
     ("median-window", po::value (&p.median_window)->default_value (p.median_window),
-     "median filter window in pixels (0 or 1: off)")
+     "median filter window in pixels (0 or 1: off); -1: --median-extent at the persons' depth")
+    ("median-extent", floatValue (&p.median_extent),
+     "median filter window in metres at the persons' depth, with --median-window -1")
     ("median-max-movement", floatValue (&p.median_max_movement),
      "largest depth change the median may make, metres")
     ("no-mixed-pixel-removal", po::bool_switch ()->notifier ([&p] (bool off) { p.remove_mixed_pixels = !off; }),
      "keep mixed pixels")
     ("mixed-window", po::value (&p.mixed_window_radius)->default_value (p.mixed_window_radius),
-     "mixed-pixel neighbour radius, pixels")
+     "mixed-pixel neighbour radius, pixels; -1: --mixed-window-angle times the focal length")
+    ("mixed-window-angle", floatValue (&p.mixed_window_angle),
+     "mixed-pixel neighbour radius as an angle of view, radians, with --mixed-window -1")
     ("mixed-min-jump", floatValue (&p.mixed_min_jump),
      "smallest depth jump with mixed pixels, metres")
     ("mixed-max-angle", floatValue (&p.mixed_max_veil_angle_deg),
@@ -147,8 +153,11 @@ pipelineOptionsDescription (DepthPipelineParams &p, std::vector<std::string> &st
      "points closer than this to the floor plane are removed, metres")
     ("naive", po::bool_switch (&p.naive), "reference AGEX: a full Dijkstra per point")
     ("spur-iterations", po::value (&p.spur_iterations)->default_value (p.spur_iterations, "auto"),
-     "erosion passes removing spurs and ragged edges (0: off); auto: --spur-depth over the point spacing")
+     "erosion passes removing spurs and ragged edges (0: off); auto: --spur-depth at each point's depth")
     ("spur-depth", floatValue (&p.spur_depth), "metres of ragged edge the auto erosion takes")
+    ("spur-min-width", floatValue (&p.spur_min_width),
+     "metres: narrower strands go, wider parts keep this much width (0: the plain erosion, which takes "
+     "parts narrower than twice --spur-depth)")
     ("spur-min-connected", po::value (&p.spur_min_connected)->default_value (p.spur_min_connected),
      "connected 8-neighbours a point needs to survive a pass");
   return desc;
@@ -159,12 +168,14 @@ pipelineFlagName (const std::string &key)
 {
   static const std::map<std::string, std::string> flags = {
       {"median_window", "median-window"},       {"median_max_movement", "median-max-movement"},
+      {"median_extent", "median-extent"},       {"mixed_window_angle", "mixed-window-angle"},
       {"mixed_window_radius", "mixed-window"},  {"mixed_min_jump", "mixed-min-jump"},
       {"mixed_max_veil_angle_deg", "mixed-max-angle"}, {"crop_min", "crop-min"},
       {"crop_max", "crop-max"},                 {"up", "up"},
       {"floor_max_tilt_deg", "floor-max-tilt"}, {"floor_distance", "floor-distance"},
       {"spur_min_connected", "spur-min-connected"}, {"spur_iterations", "spur-iterations"},
       {"spur_depth", "spur-depth"},             {"delta_connected", "delta-connected"},
+      {"spur_min_width", "spur-min-width"},     {"min_mesh_area", "min-mesh-area"},
       {"depth_step_growth", "depth-step-growth"},
       {"min_mesh_size", "min-mesh-size"},       {"k", "k"},
       {"delta_orient", "delta-orient"}};

@@ -102,7 +102,11 @@ parseTrainFlags (int argc, char **argv, TrainFlags &flags)
     ("jitter-radius", po::value (&choice.jitter_radius)->default_value (choice.jitter_radius, "0.04"),
      "metres from the tip for the extra positives")
     ("window-stride", po::value (&settings.sliding_window.stride)->default_value (settings.sliding_window.stride),
-     "detection: pixels between window centres (stored in the model)")
+     "detection: pixels between window centres, 1-64; -1: --window-stride-metres at the person's depth (stored in "
+     "the model)")
+    ("window-stride-metres", po::value (&settings.sliding_window.stride_metres)
+                                 ->default_value (settings.sliding_window.stride_metres, "0.015"),
+     "detection: metres between window centres with --window-stride -1 (stored in the model)")
     ("window-scales", po::value (&settings.sliding_window.scales)->multitoken ()->default_value (settings.sliding_window.scales, "1"),
      "detection: window extents over --patch-extent (stored in the model)");
   po::options_description fusion ("Fused detector (AGEX points and a forest's part modes)");

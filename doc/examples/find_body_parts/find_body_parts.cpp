@@ -140,7 +140,11 @@ main (int argc, char **argv)
     Cloud::Ptr body (new Cloud);
     agex::SpurFilter<pcl::PointXYZ> spurs;
     spurs.setInputCloud (standing);
-    spurs.setIterations (9);  // ~3.5 cm at 2 m: a Kinect pixel there is ~4 mm wide
+    // In metres at each point's depth (a pixel spans z / f): 3.5 cm off every edge; strands
+    // narrower than 3 cm go, wider parts (a forearm) keep 3 cm of their middle.
+    spurs.setFocalLength (static_cast<float> (frame.intrinsics.fx));
+    spurs.setErosionDepth (0.035f);
+    spurs.setMinWidth (0.03f);
     spurs.setMinConnected (6);
     spurs.setDeltaConnected (0.03f);
     spurs.setKeepOrganized (true);

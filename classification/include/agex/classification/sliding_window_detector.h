@@ -30,9 +30,11 @@ struct WindowDetection
 
 /** \brief Sliding-window body-part detector over an organized depth frame.
   *
-  * Window centres: every pixel on a stride grid (u and v multiples of getStride ()) with a
+  * Window centres: every pixel on a stride grid (u and v multiples of the stride) with a
   * finite depth, restricted to the indices given with setIndices (e.g. the segmented
-  * person) when there are any. At each centre and each scale s the window is the
+  * person) when there are any. The stride is getStride () pixels, or with setStrideMetres
+  * the pixels that many metres span at the median depth of those pixels (one stride per
+  * frame: the same windows on the person at any resolution). At each centre and each scale s the window is the
   * classifier's patch (agex::DepthPatchEstimation: the trained size, clamp and
   * s * the trained extent in metres), upright (patch axes = image axes): unlike an AGEX
   * point, a window carries no orientation to normalise with. Each window is classified;
@@ -67,6 +69,12 @@ public:
   /** Pixels between window centres, in both directions (default 3). */
   void setStride (int pixels) { stride_ = pixels; }
   int getStride () const { return stride_; }
+  /** Metres between window centres at the median depth of the candidate pixels, as pixels
+    * round (metres f / z), 1-64; 0 (default): getStride () pixels. */
+  void setStrideMetres (float metres) { stride_metres_ = metres; }
+  float getStrideMetres () const { return stride_metres_; }
+  /** The stride the last detect () used, pixels. */
+  int getUsedStride () const { return used_stride_; }
 
   /** Window extents as multiples of the classifier's trained extent (default {1}). */
   void setScales (const std::vector<float> &scales) { scales_ = scales; }
@@ -101,6 +109,8 @@ protected:
 private:
   std::shared_ptr<const PatchClassifier> classifier_;
   int stride_ = 3;
+  float stride_metres_ = 0.f;
+  int used_stride_ = 0;
   std::vector<float> scales_{1.f};
   float suppression_radius_ = 0.15f;
   float min_confidence_ = 0.f;

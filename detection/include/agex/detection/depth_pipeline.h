@@ -29,12 +29,23 @@ namespace agex
   * checks them all. */
 struct DepthPipelineParams
 {
-  // Denoising (agex::DepthMedianFilter on depth); window 0 or 1 disables it.
-  int median_window = 3;
+  // Every size the stages measure in pixels follows the focal length, and where it is a
+  // length on the person, the depth too (doc/pipeline.md, "Metric settings"), so that frames
+  // of one scene at any resolution give the same meshes. The pixel settings stay for models
+  // written before (a model file without the metric keys runs as it was trained).
+
+  // Denoising (agex::DepthMedianFilter on depth): a window of median_window pixels (0 or 1:
+  // off), or with -1 the odd window nearest to median_extent metres at the depth of the
+  // kept points (their median depth, one window per frame; 1: off).
+  int median_window = -1;
+  float median_extent = 0.025f;
   float median_max_movement = 0.05f;
-  // Mixed pixels (agex::MixedPixelFilter).
+  // Mixed pixels (agex::MixedPixelFilter): neighbours mixed_window_radius pixels away, or with
+  // -1 round (mixed_window_angle * focal length) pixels (at least 1): a sensor's veil spans
+  // an angle of its view (radians, metres per metre of depth), whatever the resolution.
   bool remove_mixed_pixels = true;
-  int mixed_window_radius = 2;
+  int mixed_window_radius = -1;
+  float mixed_window_angle = 0.004f;
   float mixed_min_jump = 0.05f;
   float mixed_max_veil_angle_deg = 15.f;
   // People (agex::PersonSegmentation): the person pixels are what the later stages see, and
@@ -55,8 +66,15 @@ struct DepthPipelineParams
   int floor_min_inliers = 200;
   // Spurs and ragged edges (agex::SpurFilter).
   int spur_min_connected = 6;
-  int spur_iterations = -1;  ///< negative: auto, spur_depth over the median point spacing
+  /** Erosion passes; 0: no spur filter; -1: spur_depth metres, in passes at each point's
+    * depth (with spur_min_width 0: spur_depth over the frame's median point spacing). */
+  int spur_iterations = -1;
   float spur_depth = 0.035f;
+  /** Strands narrower than this go entirely; parts at least this wide keep at least this
+    * width (agex::SpurFilter::setMinWidth), metres at each point's depth. 0: the plain
+    * erosion of models written before it, which takes every part narrower than twice the
+    * spur depth. */
+  float spur_min_width = 0.03f;
   // Surface meshes (agex::SurfaceSegmentation) and AGEX (agex::AGEXKeypoint).
   float delta_connected = 0.03f;
   /** The sensor's depth resolution: one surface's neighbouring depths may differ by steps of
@@ -67,7 +85,10 @@ struct DepthPipelineParams
     * is not cut into single depth steps and eroded away. Up to 2.6 m the fixed thresholds are
     * the larger. Models trained before this setting: 0. */
   float depth_step_growth = 0.0029f;
-  int min_mesh_size = -1;  ///< points; negative: 0.1% of the frame's pixels
+  int min_mesh_size = 0;  ///< points; -1: 0.1% of the frame's pixels
+  /** Smallest mesh, square metres as the camera sees it (each point counts (z / f)^2, the
+    * area its pixel covers at its depth); 0: none (models written before it). */
+  float min_mesh_area = 0.003f;
   int k = 5;               ///< AGEX points per mesh, centroid included
   float delta_orient = 0.10f;
   bool naive = false;  ///< reference AGEX: a full Dijkstra per point (not stored in models)
@@ -104,6 +125,12 @@ struct DepthPipelineResult
   std::vector<int> mesh_person;
   int mixed_pixels_removed = 0;
   int spur_iterations = 0;  ///< erosion passes actually run
+  /** What the metric settings came to on this frame: the focal length used (pixels; 0 when
+    * no setting needed one), the median window (pixels, 0: off) and the mixed-pixel radius
+    * (pixels, 0: off). */
+  float focal_length = 0.f;
+  int median_window = 0;
+  int mixed_window_radius = 0;
   /** Stage name -> milliseconds, in order (crop, mixed_pixels, denoise, floor, spurs,
     * segmentation, agex, then total). */
   std::vector<std::pair<std::string, double>> ms;
@@ -141,6 +168,14 @@ public:
   }
   const DepthPipelineParams &getParams () const { return params_; }
 
+  /** The camera's focal lengths in pixels, for the metric settings (and the person
+    * isolation); 0 (default): estimated from each frame (agex::estimateFocalLengths, or the
+    * person isolation's estimate). \throws std::invalid_argument when not 0 and outside
+    * agex::kMinFocalLength to agex::kMaxFocalLength */
+  void setFocalLength (float fx, float fy);
+  float getFocalLengthX () const { return fx_; }
+  float getFocalLengthY () const { return fy_; }
+
   /** Runs every stage on the input cloud; result is replaced. result.filtered is this
     * pipeline's buffer: the next compute () refills it in place when no result holds it any
     * longer (result itself lets go of it first), else it makes a new one. */
@@ -159,7 +194,13 @@ private:
   /** filtered_ = frame's points_, NaN everywhere else. */
   void startFilteredFrame (const pcl::PointCloud<pcl::PointXYZ> &frame);
 
+  /** The focal length (mean of fx and fy) the metric settings use on frame: the one given,
+    * the person isolation's when it ran, else estimated from frame (a 640-pixel-wide Kinect's
+    * 525, scaled to the width, when the frame has too few points to tell). */
+  float focalLength (const pcl::PointCloud<pcl::PointXYZ> &frame, bool isolated) const;
+
   DepthPipelineParams params_;
+  float fx_ = 0.f, fy_ = 0.f;
   // The stages, and what they keep between frames: a pipeline run on frame after frame
   // does not allocate (and page in) frame-sized buffers anew for each.
   agex::PersonSegmentation<pcl::PointXYZ> people_;

@@ -28,8 +28,11 @@ const char *detectorKindName (DetectorKind kind);
 /** Window layout of a sliding-window model (agex::SlidingWindowDetector). */
 struct SlidingWindowParams
 {
-  int stride = 3;                  ///< pixels between window centres, [1, 64]
+  /** Pixels between window centres, [1, 64]; -1: stride_metres at the person's depth
+    * (agex::SlidingWindowDetector::setStrideMetres). Models written before it: pixels. */
+  int stride = -1;
   std::vector<float> scales{1.f};  ///< window extents over the trained extent: 1-16 of them, each in (0, 10]
+  float stride_metres = 0.015f;    ///< metres between window centres with stride -1, (0, 0.5]
 };
 
 /** Everything a model needs to be applied as it was trained, besides the classifier. */

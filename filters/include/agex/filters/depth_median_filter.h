@@ -23,7 +23,8 @@ namespace agex
   *   - the output is a copy of the input (all fields) in which each finite point
   *     (pcl::isFinite: x, y and z finite) gets a new z; invalid points stay as they are;
   *   - the window is the (2 * (size / 2) + 1)^2 pixels around the point (so an even
-  *     size behaves as the next odd one, as in PCL), clipped at the image border;
+  *     size behaves as the next odd one, as in PCL), clipped at the image border
+  *     (with setSampleSpacing s > 1: as many samples, s pixels apart);
   *     non-finite neighbours are skipped;
   *   - the median is the element at count / 2 after std::nth_element over the window's
   *     depths in row-major order (the upper median for an even count);
@@ -62,6 +63,13 @@ public:
   void setWindowSize (int size) { window_size_ = size; }
   int getWindowSize () const { return window_size_; }
 
+  /** Pixels between the window's samples (default 1: every pixel, as pcl::MedianFilter; at
+    * most kMaxSpacing). A window of size 3 and spacing s spans 2 s + 1 pixels with 9
+    * samples: a median over a given extent in metres costs the same at any resolution. */
+  void setSampleSpacing (int pixels) { sample_spacing_ = pixels; }
+  int getSampleSpacing () const { return sample_spacing_; }
+  static constexpr int kMaxSpacing = 64;
+
   /** Largest change of a point's depth, metres (default: no limit, as pcl::MedianFilter). */
   void setMaxAllowedMovement (float metres) { max_allowed_movement_ = metres; }
   float getMaxAllowedMovement () const { return max_allowed_movement_; }
@@ -93,6 +101,7 @@ private:
   void filterPoints (PointCloud &output);
 
   int window_size_ = 5;
+  int sample_spacing_ = 1;
   float max_allowed_movement_ = std::numeric_limits<float>::max ();
   bool keep_on_viewing_ray_ = true;
   std::vector<float> depth_;    // z of each point, NaN where not finite; current around the points filtered

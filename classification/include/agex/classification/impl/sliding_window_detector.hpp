@@ -2,6 +2,7 @@
 
 #include <agex/classification/non_maximum_suppression.h>
 #include <agex/classification/sliding_window_detector.h>
+#include <agex/common/statistics.h>
 #include <agex/features/depth_patch_estimation.h>
 
 #include <pcl/console/print.h>
@@ -39,51 +40,75 @@ agex::SlidingWindowDetector<PointT>::detect (std::vector<WindowDetection> &outpu
   const bool scales_ok = !scales_.empty () && std::all_of (scales_.begin (), scales_.end (), [] (float s) {
     return std::isfinite (s) && s > 0.f;
   });
-  if (stride_ < 1 || !scales_ok || !(focal_length_ >= 0.f) || !std::isfinite (focal_length_))
+  if (stride_ < 1 || !scales_ok || !(focal_length_ >= 0.f) || !std::isfinite (focal_length_) ||
+      !(stride_metres_ >= 0.f) || !std::isfinite (stride_metres_))
   {
-    PCL_ERROR ("[agex::SlidingWindowDetector::detect] Invalid parameters: stride %d (>= 1), %zu scales (at least "
-               "one, each finite and > 0), focal length %g (>= 0, 0 = estimate).\n", stride_, scales_.size (),
-               focal_length_);
+    PCL_ERROR ("[agex::SlidingWindowDetector::detect] Invalid parameters: stride %d (>= 1), stride %g m (finite, "
+               ">= 0), %zu scales (at least one, each finite and > 0), focal length %g (>= 0, 0 = estimate).\n",
+               stride_, stride_metres_, scales_.size (), focal_length_);
     return false;
   }
+  used_stride_ = 0;
 
-  // Window centres: finite pixels on the stride grid, among the user's indices if any.
+  // Candidate pixels: finite ones, among the user's indices if any.
   const int width = static_cast<int> (input_->width);
-  auto is_centre = [&] (int index) {
+  auto usable = [&] (int index) {
     if (index < 0 || static_cast<std::size_t> (index) >= input_->size ())
       return false;
     const PointT &p = (*input_)[index];
-    return (index % width) % stride_ == 0 && (index / width) % stride_ == 0 && std::isfinite (p.x) &&
-           std::isfinite (p.y) && std::isfinite (p.z) && p.z > 0.f;
+    return std::isfinite (p.x) && std::isfinite (p.y) && std::isfinite (p.z) && p.z > 0.f;
   };
-  pcl::IndicesPtr centres (new pcl::Indices);
+  pcl::Indices pixels;
   if (indices_ && !fake_indices_)
   {
     for (const auto index : *indices_)
-      if (is_centre (index))
-        centres->push_back (index);
-    std::sort (centres->begin (), centres->end ());
-    centres->erase (std::unique (centres->begin (), centres->end ()), centres->end ());
+      if (usable (index))
+        pixels.push_back (index);
+    std::sort (pixels.begin (), pixels.end ());
+    pixels.erase (std::unique (pixels.begin (), pixels.end ()), pixels.end ());
   }
   else
     for (int index = 0; index < static_cast<int> (input_->size ()); ++index)
-      if (is_centre (index))
-        centres->push_back (index);
+      if (usable (index))
+        pixels.push_back (index);
+  if (pixels.empty ())
+    return true;
+
+  // One focal length for the stride and for every scale and chunk.
+  const float focal = focal_length_ > 0.f ? focal_length_ : DepthPatchEstimation<PointT, DepthPatch>::estimateFocalLength (*input_);
+  const auto no_focal = [] {
+    PCL_ERROR ("[agex::SlidingWindowDetector::detect] Cannot estimate the focal length from the input cloud; "
+               "call setFocalLength.\n");
+    return false;
+  };
+
+  // Window centres: the candidates on the stride grid.
+  int stride = stride_;
+  if (stride_metres_ > 0.f)
+  {
+    if (!(focal > 0.f))
+      return no_focal ();
+    const std::size_t step = std::max<std::size_t> (1, pixels.size () / 2048);
+    std::vector<float> depths;
+    for (std::size_t k = 0; k < pixels.size (); k += step)
+      depths.push_back ((*input_)[pixels[k]].z);
+    std::nth_element (depths.begin (), depths.begin () + depths.size () / 2, depths.end ());
+    stride = clampedInt (std::round (stride_metres_ * focal / depths[depths.size () / 2]), 1, 64);
+  }
+  used_stride_ = stride;
+  pcl::IndicesPtr centres (new pcl::Indices);
+  for (const auto index : pixels)
+    if ((index % width) % stride == 0 && (index / width) % stride == 0)
+      centres->push_back (index);
   if (centres->empty ())
     return true;
+  if (!(focal > 0.f))
+    return no_focal ();
 
   DepthPatchEstimation<PointT, DepthPatch> estimation;
   estimation.setInputCloud (input_);
   estimation.setPatchSize (geometry.size);
   estimation.setClampDepth (geometry.clamp);
-  // One focal length for every scale and chunk.
-  const float focal = focal_length_ > 0.f ? focal_length_ : DepthPatchEstimation<PointT, DepthPatch>::estimateFocalLength (*input_);
-  if (!(focal > 0.f))
-  {
-    PCL_ERROR ("[agex::SlidingWindowDetector::detect] Cannot estimate the focal length from the input cloud; "
-               "call setFocalLength.\n");
-    return false;
-  }
   estimation.setFocalLength (focal);
 
   const int classes = classifier_->classes ();

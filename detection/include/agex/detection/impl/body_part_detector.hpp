@@ -275,7 +275,9 @@ agex::BodyPartDetector<PointT>::classify (std::vector<BodyPartDetection> &detect
       detector.setInputCloud (prepared.filtered);
       detector.setIndices (surface);
       detector.setClassifier (model_->classifierPtr ());
-      detector.setStride (settings_.sliding_window.stride);
+      // Models written before the metric stride keep their pixels.
+      detector.setStride (std::max (settings_.sliding_window.stride, 1));
+      detector.setStrideMetres (settings_.sliding_window.stride < 0 ? settings_.sliding_window.stride_metres : 0.f);
       detector.setScales (settings_.sliding_window.scales);
       detector.setSuppressionRadius (settings_.suppression_radius);
       std::vector<agex::WindowDetection> found;

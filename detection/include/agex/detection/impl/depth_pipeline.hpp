@@ -1,5 +1,6 @@
 #pragma once
 
+#include <agex/common/focal_length.h>
 #include <agex/common/organized_neighbourhood.h>
 #include <agex/common/statistics.h>
 #include <agex/detection/depth_pipeline.h>
@@ -18,6 +19,8 @@
 #include <cmath>
 #include <iterator>
 #include <limits>
+#include <stdexcept>
+#include <string>
 #include <type_traits>
 
 namespace agex
@@ -51,6 +54,37 @@ autoSpurIterations (const pcl::PointCloud<pcl::PointXYZ> &cloud, const pcl::Indi
   if (!(median_spacing > 0.f))
     return 0;
   return clampedInt (std::round (spur_depth / median_spacing), 1, 16);  // spacing may be absurd
+}
+
+/** The median depth of the points (indices into cloud), from at most about 2,000 of them
+  * spread over the list; NaN when there are none. */
+inline float
+medianDepth (const pcl::PointCloud<pcl::PointXYZ> &cloud, const pcl::Indices &points)
+{
+  const std::size_t step = std::max<std::size_t> (1, points.size () / 2048);
+  std::vector<float> z;
+  z.reserve (points.size () / step + 1);
+  for (std::size_t k = 0; k < points.size (); k += step)
+  {
+    const float d = cloud[static_cast<std::size_t> (points[k])].z;
+    if (std::isfinite (d) && d > 0.f)
+      z.push_back (d);
+  }
+  if (z.empty ())
+    return std::numeric_limits<float>::quiet_NaN ();
+  std::nth_element (z.begin (), z.begin () + z.size () / 2, z.end ());
+  return z[z.size () / 2];
+}
+
+/** The sample spacing of a 3x3 median spanning about extent metres at depth z with focal
+  * length f (2 spacing + 1 pixels); 0 (off) when that is under 2 pixels. */
+inline int
+metricMedianSpacing (float extent, float f, float z)
+{
+  const double pixels = static_cast<double> (extent) * f / z;
+  if (!(pixels >= 2.0))  // NaN depth too
+    return 0;
+  return clampedInt (std::round ((pixels - 1.0) / 2.0), 1, DepthMedianFilter<pcl::PointXYZ>::kMaxSpacing);
 }
 
 /** The points of sorted that are not in removed, a sorted subsequence of it. */
@@ -120,6 +154,32 @@ agex::DepthPipeline<PointT>::startFilteredFrame (const pcl::PointCloud<pcl::Poin
 }
 
 template <typename PointT> void
+agex::DepthPipeline<PointT>::setFocalLength (float fx, float fy)
+{
+  const auto ok = [] (float f) { return f == 0.f || saneFocalLength (f); };
+  if (!ok (fx) || !ok (fy) || ((fx == 0.f) != (fy == 0.f)))
+    throw std::invalid_argument ("focal lengths " + std::to_string (fx) + ", " + std::to_string (fy) +
+                                 " px: both 0 (estimated) or both within " + std::to_string (kMinFocalLength) +
+                                 " to " + std::to_string (kMaxFocalLength) + " px");
+  fx_ = fx;
+  fy_ = fy;
+}
+
+template <typename PointT> float
+agex::DepthPipeline<PointT>::focalLength (const pcl::PointCloud<pcl::PointXYZ> &frame, bool isolated) const
+{
+  if (fx_ > 0.f && fy_ > 0.f)
+    return 0.5f * (fx_ + fy_);
+  // The person isolation has fitted them on this frame already.
+  if (isolated && saneFocalLength (people_.getUsedFocalLengthX ()) && saneFocalLength (people_.getUsedFocalLengthY ()))
+    return 0.5f * (people_.getUsedFocalLengthX () + people_.getUsedFocalLengthY ());
+  float fx = 0.f, fy = 0.f;
+  if (estimateFocalLengths (frame, fx, fy) && saneFocalLength (fx) && saneFocalLength (fy))
+    return 0.5f * (fx + fy);
+  return 525.f * static_cast<float> (frame.width) / 640.f;  // too few points to tell: little to clean
+}
+
+template <typename PointT> void
 agex::DepthPipeline<PointT>::compute (DepthPipelineResult &result)
 {
   using Clock = std::chrono::steady_clock;
@@ -141,6 +201,7 @@ agex::DepthPipeline<PointT>::compute (DepthPipelineResult &result)
     people_.setFloorMaxTilt (params.floor_max_tilt_deg);
     people_.setFloorDistance (params.floor_distance);
     people_.setHiddenPersons (params.hidden_people, people_.getHiddenPersonMinArea ());
+    people_.setFocalLength (fx_, fy_);
     people_.segment (person_labels_, result.persons);
     result.person_info = people_.getPersons ();
     if (people_.getFloorFound ())
@@ -176,6 +237,12 @@ agex::DepthPipeline<PointT>::compute (DepthPipelineResult &result)
     crop.filter (*boxed);
     inside = boxed;
   }
+  // The focal length, for the settings given in metres (or as an angle) rather than pixels.
+  const bool spur_metric = params.spur_min_width > 0.f;
+  const bool needs_focal = params.median_window < 0 || (params.remove_mixed_pixels && params.mixed_window_radius < 0) ||
+                           (spur_metric && params.spur_iterations != 0) || params.min_mesh_area > 0.f;
+  const float focal = organized && needs_focal ? focalLength (*frame, params.isolate_people) : 0.f;
+  result.focal_length = focal;
   result.ms.emplace_back ("crop", msSince (start));
 
   // 2. Mixed pixels among the kept points, judged against neighbours from the whole
@@ -185,9 +252,14 @@ agex::DepthPipeline<PointT>::compute (DepthPipelineResult &result)
   points_->assign (inside->begin (), inside->end ());
   if (params.remove_mixed_pixels && organized && !inside->empty ())
   {
+    // A veil spans an angle of the sensor's view: as many pixels as the focal length says.
+    const int radius = params.mixed_window_radius > 0
+                           ? params.mixed_window_radius
+                           : clampedInt (std::round (params.mixed_window_angle * focal), 1, 31);
+    result.mixed_window_radius = radius;
     mixed_.setInputCloud (frame);
     mixed_.setIndices (inside);
-    mixed_.setWindowRadius (params.mixed_window_radius);
+    mixed_.setWindowRadius (radius);
     mixed_.setMinJump (params.mixed_min_jump);
     mixed_.setMinJumpGrowth (2.5f * params.depth_step_growth);
     mixed_.setMaxVeilAngle (params.mixed_max_veil_angle_deg);
@@ -204,11 +276,25 @@ agex::DepthPipeline<PointT>::compute (DepthPipelineResult &result)
   // 3. Denoise depth: a median over each point's valid neighbours, moving the point along
   // its pixel's viewing ray. Everything but the kept points is NaN by now.
   start = Clock::now ();
-  if (params.median_window > 1 && organized && !points_->empty ())
+  // In metres: one window per frame, at the kept points' median depth (a window per pixel
+  // would need a window size per pixel; persons at very different depths share it), as 3x3
+  // samples spread over it, so that it costs the same at any resolution and distance.
+  int median_window = params.median_window, median_spacing = 1;
+  if (median_window < 0)
   {
+    median_spacing = organized && !points_->empty ()
+                         ? detail::metricMedianSpacing (params.median_extent, focal, detail::medianDepth (cloud, *points_))
+                         : 0;
+    median_window = median_spacing > 0 ? 3 : 1;
+    median_spacing = std::max (median_spacing, 1);
+  }
+  if (median_window > 1 && organized && !points_->empty ())
+  {
+    result.median_window = 2 * (median_window / 2) * median_spacing + 1;
     median_.setInputCloud (filtered_);
     median_.setIndices (points_);
-    median_.setWindowSize (params.median_window);
+    median_.setWindowSize (median_window);
+    median_.setSampleSpacing (median_spacing);
     median_.setMaxAllowedMovement (params.median_max_movement);
     median_.setKeepOnViewingRay (true);
     median_.filterInPlace (cloud);
@@ -241,15 +327,20 @@ agex::DepthPipeline<PointT>::compute (DepthPipelineResult &result)
   // 5. Spurs and ragged edges: geodesic extrema are drawn to them.
   start = Clock::now ();
   int spur_iterations = params.spur_iterations;
-  if (spur_iterations < 0)
+  if (spur_iterations < 0 && !spur_metric)
     spur_iterations = organized ? detail::autoSpurIterations (cloud, *points_, params.spur_depth) : 0;
-  result.spur_iterations = spur_iterations;
-  if (spur_iterations > 0 && organized && !points_->empty ())
+  result.spur_iterations = spur_metric ? 0 : spur_iterations;
+  if (spur_iterations != 0 && organized && !points_->empty ())
   {
     spurs_.setInputCloud (filtered_);
     spurs_.setIndices (points_);
     spurs_.setMinConnected (params.spur_min_connected);
-    spurs_.setIterations (spur_iterations);
+    // In metres: each point's erosion depth and width at its own depth (no window, so no
+    // cost per pixel beyond the erosion's); a fixed pass count keeps the width rule.
+    spurs_.setFocalLength (spur_metric ? focal : 0.f);
+    spurs_.setMinWidth (spur_metric ? params.spur_min_width : 0.f);
+    spurs_.setErosionDepth (spur_metric && spur_iterations < 0 ? params.spur_depth : 0.f);
+    spurs_.setIterations (std::max (spur_iterations, 0));
     spurs_.setDeltaConnected (params.delta_connected);
     spurs_.setDeltaConnectedGrowth (1.5f * params.depth_step_growth);
     spurs_.setNegative (true);  // the spur points themselves, to blank them
@@ -258,6 +349,8 @@ agex::DepthPipeline<PointT>::compute (DepthPipelineResult &result)
     for (const auto i : removed)
       detail::invalidate (cloud[i]);
     detail::removeSortedSubset (*points_, removed);
+    if (spur_metric)
+      result.spur_iterations = spurs_.getPassesRun ();
   }
   result.ms.emplace_back ("spurs", msSince (start));
 
@@ -273,6 +366,18 @@ agex::DepthPipeline<PointT>::compute (DepthPipelineResult &result)
     segmentation_.setDeltaConnectedGrowth (1.5f * params.depth_step_growth);
     segmentation_.setMinMeshSize (static_cast<std::size_t> (min_mesh));
     segmentation_.segment (result.meshes);
+    // The area a mesh covers as the camera sees it: each pixel (z / f)^2 at its depth.
+    if (params.min_mesh_area > 0.f && focal > 0.f)
+    {
+      const double per_pixel = 1.0 / (static_cast<double> (focal) * focal);
+      const auto small = [&] (const pcl::PointIndices &mesh) {
+        double area = 0.0;
+        for (const auto i : mesh.indices)
+          area += static_cast<double> (cloud[i].z) * cloud[i].z * per_pixel;
+        return area < params.min_mesh_area;
+      };
+      result.meshes.erase (std::remove_if (result.meshes.begin (), result.meshes.end (), small), result.meshes.end ());
+    }
   }
   result.ms.emplace_back ("segmentation", msSince (start));
 

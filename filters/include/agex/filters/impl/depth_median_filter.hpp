@@ -15,17 +15,20 @@ namespace detail
 {
 /** The median as pcl::MedianFilter takes it: the valid depths of the window around
   * (u, v) in row-major order (NaN marks invalid ones), element count / 2 after
-  * std::nth_element. window has room for the whole window; (u, v) itself is valid. */
+  * std::nth_element. The window's samples lie spacing pixels apart, radius of them on each
+  * side (spacing 1: pcl::MedianFilter's window). window has room for the whole window;
+  * (u, v) itself is valid. */
 inline float
-windowMedian (const float *depth, int width, int height, int u, int v, int radius, float *window)
+windowMedian (const float *depth, int width, int height, int u, int v, int radius, int spacing, float *window)
 {
-  const int u_first = std::max (u - radius, 0), u_last = std::min (u + radius, width - 1);
-  const int v_first = std::max (v - radius, 0), v_last = std::min (v + radius, height - 1);
+  const int reach = radius * spacing;
+  const int u_first = u - std::min (u, reach) / spacing * spacing, u_last = u + std::min (width - 1 - u, reach) / spacing * spacing;
+  const int v_first = v - std::min (v, reach) / spacing * spacing, v_last = v + std::min (height - 1 - v, reach) / spacing * spacing;
   int count = 0;
-  for (int y = v_first; y <= v_last; ++y)
+  for (int y = v_first; y <= v_last; y += spacing)
   {
     const float *row = depth + static_cast<std::size_t> (y) * width;
-    for (int x = u_first; x <= u_last; ++x)
+    for (int x = u_first; x <= u_last; x += spacing)
     {
       window[count] = row[x];
       count += std::isnan (row[x]) ? 0 : 1;  // overwritten by the next one if invalid
@@ -36,23 +39,24 @@ windowMedian (const float *depth, int width, int height, int u, int v, int radiu
   return *middle;
 }
 
-/** The same median for a 3x3 window inside the image, centred at depth[0] (stride
-  * width), without branches: a 19-exchange median-of-9 network (Paeth) over the window
+/** The same median for a 3x3 window (samples spacing pixels apart) inside the image,
+  * centred at depth[0] (stride width), without branches: a 19-exchange median-of-9 network (Paeth) over the window
   * with its n invalid depths replaced by 4 - n / 2 times -inf and the rest +inf, which
   * leaves element n / 2 of the valid depths in the middle. Any selection yields the same
   * value; only +0 and -0 compare equal with different bits, so a window holding a zero
   * returns false and is left to windowMedian, which picks the zero PCL picks. */
 inline bool
-median3x3 (const float *depth, int width, float &median)
+median3x3 (const float *depth, int width, int spacing, float &median)
 {
   float p[9];
-  const float *rows[3] = {depth - width - 1, depth - 1, depth + width - 1};
+  const std::ptrdiff_t row = static_cast<std::ptrdiff_t> (width) * spacing;
+  const float *rows[3] = {depth - row - spacing, depth - spacing, depth + row - spacing};
   int valid = 0;
   bool zero = false;
   for (int r = 0; r < 3; ++r)
     for (int c = 0; c < 3; ++c)
     {
-      const float z = rows[r][c];
+      const float z = rows[r][c * spacing];
       p[3 * r + c] = z;
       valid += std::isnan (z) ? 0 : 1;
       zero |= z == 0.f;
@@ -88,7 +92,7 @@ template <typename PointT> void
 agex::DepthMedianFilter<PointT>::filterPoints (PointCloud &output, float *window) const
 {
   const int width = static_cast<int> (output.width), height = static_cast<int> (output.height);
-  const int radius = window_size_ / 2;
+  const int radius = window_size_ / 2, spacing = sample_spacing_;
   const float *depth = depth_.data ();
   for (const auto index : *indices_)
   {
@@ -97,9 +101,9 @@ agex::DepthMedianFilter<PointT>::filterPoints (PointCloud &output, float *window
       continue;  // not a finite point: stays as it is
     const int u = index % width, v = index / width;
     float median;
-    const bool inside = u > 0 && v > 0 && u < width - 1 && v < height - 1;
-    if (!(radius == 1 && inside && detail::median3x3 (depth + index, width, median)))
-      median = detail::windowMedian (depth, width, height, u, v, radius, window);
+    const bool inside = u >= spacing && v >= spacing && u < width - spacing && v < height - spacing;
+    if (!(radius == 1 && inside && detail::median3x3 (depth + index, width, spacing, median)))
+      median = detail::windowMedian (depth, width, height, u, v, radius, spacing, window);
 
     // pcl::MedianFilter's clamp, in its arithmetic (bit-identical results).
     const float step = median - z0;
@@ -131,17 +135,18 @@ agex::DepthMedianFilter<PointT>::prepare ()
                "neighbouring pixels needs the pixel grid.\n", getClassName ().c_str (), input_->height);
     return false;
   }
-  if (window_size_ < 1 || !(max_allowed_movement_ >= 0.f))
+  if (window_size_ < 1 || !(max_allowed_movement_ >= 0.f) || sample_spacing_ < 1 || sample_spacing_ > kMaxSpacing)
   {
     PCL_ERROR ("[agex::%s::applyFilter] Invalid parameters: window size %d (>= 1), max allowed movement %g "
-               "(>= 0).\n", getClassName ().c_str (), window_size_, max_allowed_movement_);
+               "(>= 0), sample spacing %d (1-%d).\n", getClassName ().c_str (), window_size_, max_allowed_movement_,
+               sample_spacing_, kMaxSpacing);
     return false;
   }
   // One contiguous depth array, NaN marking the points PCL skips (pcl::isFinite):
   // the window loop then reads 4 bytes per neighbour instead of a whole point. Only the
   // windows around the filtered points are read, so only they are filled.
   const int width = static_cast<int> (input_->width);
-  rowSpans (*indices_, width, static_cast<int> (input_->height), window_size_ / 2, spans_);
+  rowSpans (*indices_, width, static_cast<int> (input_->height), window_size_ / 2 * sample_spacing_, spans_);
   depth_.resize (input_->size ());
   for (int v = 0; v < static_cast<int> (input_->height); ++v)
     for (int u = spans_[static_cast<std::size_t> (v)].first; u <= spans_[static_cast<std::size_t> (v)].second; ++u)

@@ -85,14 +85,13 @@ forestParts (const DepthPipelineResult &prepared, const pcl::PointCloud<pcl::Poi
   // The person as segmented: the mixed-pixel, median and spur filters thin a forearm or a
   // hand at 2 m to nothing or to a sliver the forest has never seen (a narrowed head reads
   // as a hand), so the forest reads the frame's own depth at every pixel of the person.
-  // Persons too far for their parts to be found get no guesses (PersonInfo::too_far).
+  // Persons too far for a hand to be found are labelled too: the detector drops their hand
+  // guesses only (PersonInfo::too_far).
   auto body = std::make_shared<pcl::Indices> ();
   if (persons)
   {
     for (std::size_t p = 0; p < prepared.persons.size (); ++p)
     {
-      if (p < prepared.person_info.size () && prepared.person_info[p].too_far)
-        continue;
       for (const auto i : prepared.persons[p].indices)
       {
         if (i < 0 || static_cast<std::size_t> (i) >= frame->size ())

@@ -138,7 +138,7 @@ enum class PersonVerdict;
   *
   * "Too far" (getTooFar): a hand of the hand area at the person's distance covers
   * hand_area * fx * fy / z^2 pixels; below the minimum hand pixels the detector has too few
-  * to find hands. Focal lengths are estimated from the cloud (u = fx x / z + cx) unless
+  * to find hands (agex::BodyPartDetector then reports the person's head and feet only). Focal lengths are estimated from the cloud (u = fx x / z + cx) unless
   * given with setFocalLength.
   *
   * Persons come out largest first (ties: lowest first index), each with its indices in
@@ -313,7 +313,7 @@ public:
   float getFallbackMinExtent () const { return fallback_min_extent_; }
   float getMinBackgroundFraction () const { return min_background_fraction_; }
   /** "Too far": a hand of area square metres (default 0.01, a hand seen at an angle) must
-    * cover at least pixels pixels (default 50). */
+    * cover at least pixels pixels (default 16, a patch of 4 x 4: fewer hold no hand shape). */
   void setHandLimits (float area, float pixels)
   {
     hand_area_ = area;
@@ -421,7 +421,7 @@ private:
   float min_head_distance_ = 0.3f, min_valley_depth_ = 0.15f, max_narrowing_ = 0.7f;
   float merge_reach_ = 0.6f, merge_distance_ = 0.3f;
   float fallback_min_extent_ = 0.3f, min_background_fraction_ = 0.5f;
-  float hand_area_ = 0.01f, min_hand_pixels_ = 50.f;
+  float hand_area_ = 0.01f, min_hand_pixels_ = 16.f;
   bool find_hidden_ = true;
   float hidden_min_area_ = 0.06f;
   std::vector<PersonInfo> infos_;

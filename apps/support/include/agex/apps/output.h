@@ -81,8 +81,8 @@ cv::Mat renderDetections (const pcl::PointCloud<pcl::PointXYZ> &frame, const std
 cv::Mat renderPartLabels (const pcl::PointCloud<pcl::PointXYZ> &frame, const pcl::PointCloud<BodyPartLabelPoint> &labels,
                           const std::vector<PartMode> &modes, const std::vector<PartLabel> &truth);
 /** The people of a frame as agex_detect writes them: per person its id (its index),
-  * pixels, distance (median depth, m), height (top above the floor, m), too_far (no
-  * parts looked for: too few pixels for a hand) and hidden (seen only in pieces behind a
+  * pixels, distance (median depth, m), height (top above the floor, m), too_far (too
+  * few pixels for a hand: no hand guesses) and hidden (seen only in pieces behind a
   * nearer person). */
 nlohmann::json personsJson (const std::vector<PersonInfo> &persons);
 }  // namespace apps

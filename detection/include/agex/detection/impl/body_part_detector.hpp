@@ -122,8 +122,10 @@ agex::BodyPartDetector<PointT>::assignPersons (std::vector<BodyPartDetection> &d
       d.person = r.mesh_person[static_cast<std::size_t> (d.mesh)];
     else if (d.mesh < 0 && inside && !person_of.empty ())
       d.person = person_of[static_cast<std::size_t> (index)];
-    // A person too far for its parts to have pixels enough gets no guesses (PersonInfo::too_far).
-    if (d.person >= 0 && static_cast<std::size_t> (d.person) < r.person_info.size () &&
+    // A person too far for a hand to have pixels enough gets no hand guesses
+    // (PersonInfo::too_far); its head and feet, several times a hand's size, still count.
+    if (d.part == BodyPart::Hand && d.person >= 0 &&
+        static_cast<std::size_t> (d.person) < r.person_info.size () &&
         r.person_info[static_cast<std::size_t> (d.person)].too_far)
       continue;
     kept.push_back (d);

@@ -685,8 +685,8 @@ TEST (PersonSegmentation, FloorSeenOnlyFarAwayIsFound)
 
 TEST (PersonSegmentation, FeetJustAboveTheFloorStayWithThePerson)
 {
-  // The floor margin (4 cm) would cut the feet off at the floor: the shoe's pixels 1.5-3 cm
-  // above the floor are the person's, the floor beside them is not.
+  // The floor margin (4 cm) would cut the feet off at the floor: with setFloorContact the
+  // shoe's pixels 1.5-3 cm above the floor are the person's, the floor beside them is not.
   for (const double z : {2.5, 4.0})
   {
     SCOPED_TRACE (z);
@@ -694,7 +694,9 @@ TEST (PersonSegmentation, FeetJustAboveTheFloorStayWithThePerson)
     scene.addPerson (0.2, z);
     const DepthCamera cam;
     const Cloud::Ptr cloud = scene.render (cam);
-    const Found found = segment (cloud);
+    Segmentation with_contact;
+    with_contact.setFloorContact (true);
+    const Found found = segment (cloud, &with_contact);
     ASSERT_EQ (found.persons.size (), 1u);
     // The person alone without noise: which pixels are its feet, how high.
     Scene alone;

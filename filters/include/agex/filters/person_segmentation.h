@@ -131,15 +131,16 @@ enum class PersonVerdict;
   *    of person-like size in front of the background).
   * 8. **Full resolution.** A pixel in the block of a person's cell, or of a free cell next
   *    to one, is the person's when its depth lies within the gap of the depths of the
-  *    person's cells around it (and above the floor margin, or, the feet, above the floor
-  *    under the person and right under a pixel of the person: kMinFootHeight; and on its side
-  *    of a cut). It is a test per pixel: following connections pixel by pixel is left to the
+  *    person's cells around it (and above the floor margin, or, with setFloorContact, the
+  *    feet, above the floor under the person and right under a pixel of the person:
+  *    kMinFootHeight; and on its side of a cut). It is a test per pixel: following connections pixel by pixel is left to the
   *    surface segmentation that runs on the persons' pixels anyway.
   *
   * "Too far" (getTooFar): a hand of the hand area at the person's distance covers
   * hand_area * fx * fy / z^2 pixels; below the minimum hand pixels the detector has too few
-  * to find hands (agex::BodyPartDetector then reports the person's head and feet only). Focal lengths are estimated from the cloud (u = fx x / z + cx) unless
-  * given with setFocalLength.
+  * to find hands (agex::BodyPartDetector then reports the person's head and feet only).
+  * Focal lengths are estimated from the cloud (u = fx x / z + cx) unless given with
+  * setFocalLength.
   *
   * Persons come out largest first (ties: lowest first index), each with its indices in
   * increasing order. Misuse (unorganized input, parameters out of range, a non-finite or
@@ -188,7 +189,7 @@ public:
   float getFloorMaxTilt () const { return floor_max_tilt_deg_; }
   /** Floor inlier distance for the search, and the least floor margin: points lower than
     * max(this, 3 noise(z) H / z) above the floor, H their height below the camera, belong
-    * to nobody but the feet (kMinFootHeight; default 0.04 m). */
+    * to nobody (but the feet with setFloorContact; default 0.04 m). */
   void setFloorDistance (float metres) { floor_distance_ = metres; }
   float getFloorDistance () const { return floor_distance_; }
   /** A plane found is the floor only if its inliers spread over an area: the smaller
@@ -203,6 +204,14 @@ public:
     * person (the median height of the floor cells among its blocks) by at least three times
     * their height noise and at least this, metres. */
   static constexpr float kMinFootHeight = 0.01f;
+  /** Whether pixels below the floor margin may be the person's feet (the rule of
+    * kMinFootHeight; default false). Off, the floor margin takes the shoes' lowest few
+    * centimetres; on, they stay, but on the Bonn keyframes at 640x480 the first five AGEX
+    * extrema then reach a foot tip in 0.58 of the feet instead of 0.77 (the kept strip along
+    * the floor contact draws the geodesic extremum off the toe), so it is off until the
+    * detector's stages gain from it (doc/pipeline.md, "People"). */
+  void setFloorContact (bool keep) { floor_contact_ = keep; }
+  bool getFloorContact () const { return floor_contact_; }
 
   /** Focal lengths in pixels; 0 (default): estimated from the cloud. Given or estimated, a
     * focal length outside kMinFocalLength to kMaxFocalLength (agex/common/focal_length.h; a
@@ -423,6 +432,7 @@ private:
   float fallback_min_extent_ = 0.3f, min_background_fraction_ = 0.5f;
   float hand_area_ = 0.01f, min_hand_pixels_ = 16.f;
   bool find_hidden_ = true;
+  bool floor_contact_ = false;
   float hidden_min_area_ = 0.06f;
   std::vector<PersonInfo> infos_;
   pcl::PointCloud<pcl::Label> scratch_labels_;

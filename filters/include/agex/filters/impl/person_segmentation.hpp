@@ -1395,7 +1395,7 @@ agex::PersonSegmentation<PointT>::personPixels (const detail::PersonScan &scan,
             // noisy bit of the floor beside it does not).
             const float h = scan.normal.dot (p.getVector3fMap ()) + scan.offset;
             if (h < floorMargin (scan, p.z, h) &&
-                (h - blocks.floor_level < std::max (kMinFootHeight,
+                (!floor_contact_ || h - blocks.floor_level < std::max (kMinFootHeight,
                                                     3.f * detail::heightNoise (depth_noise_, p.z, h - scan.offset)) ||
                  !detail::belowPerson (labels, i, width, label)))
               continue;

@@ -119,6 +119,17 @@ DepthPipelineParams::toJson () const
 }
 
 DepthPipelineParams
+DepthPipelineParams::pixelSettings (DepthPipelineParams base)
+{
+  base.median_window = 3;
+  base.mixed_window_radius = 2;
+  base.spur_min_width = 0.f;
+  base.min_mesh_size = -1;
+  base.min_mesh_area = 0.f;
+  return base;
+}
+
+DepthPipelineParams
 DepthPipelineParams::fromJson (const nlohmann::json &doc, const std::string &source)
 {
   const Namer name = [&source] (const std::string &key) { return source + ": pipeline." + key; };

@@ -95,17 +95,11 @@ runPortrait (const Keyframe &key, const std::vector<agex::BonnLabel> &all_labels
 }
 
 /** The pixel settings of the models written before the metric ones (what the bundled
-  * models run): 3x3 median, mixed-pixel radius 2, the plain erosion, 0.1% of the pixels. */
+  * models run). */
 PipelineParams
 legacyPixelParams ()
 {
-  PipelineParams params;
-  params.median_window = 3;
-  params.mixed_window_radius = 2;
-  params.spur_min_width = 0.f;
-  params.min_mesh_size = -1;
-  params.min_mesh_area = 0.f;
-  return params;
+  return PipelineParams::pixelSettings (PipelineParams ());
 }
 
 /** Head and feet among AGEX_5 on the arms-down keyframes, with the given settings; skip:

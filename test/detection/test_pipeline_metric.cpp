@@ -35,17 +35,11 @@ kinectCamera (int width, int height)
   return cam;
 }
 
-/** The pipeline settings of the models written before the metric ones: 3x3 median,
-  * mixed-pixel radius 2, the plain erosion, 0.1% of the pixels. */
+/** The pipeline settings of the models written before the metric ones. */
 PipelineParams
 pixelSettings (PipelineParams params = PipelineParams ())
 {
-  params.median_window = 3;
-  params.mixed_window_radius = 2;
-  params.spur_min_width = 0.f;
-  params.min_mesh_size = -1;
-  params.min_mesh_area = 0.f;
-  return params;
+  return PipelineParams::pixelSettings (params);
 }
 
 /** The cleaning stages on a figure before a wall: no person isolation (a figure is nobody),

@@ -101,6 +101,11 @@ struct DepthPipelineParams
   /** validate () naming each setting by its key. */
   void validate () const;
 
+  /** base with the cleaning settings of models written before the metric ones (what the
+    * bundled Bonn models run): 3x3 median, mixed-pixel radius 2 pixels, the plain spur
+    * erosion, 0.1% of the frame's pixels as the smallest mesh (doc/pipeline.md). */
+  static DepthPipelineParams pixelSettings (DepthPipelineParams base);
+
   /** The settings as stored in a model file ("pipeline" object; naive is not stored). */
   nlohmann::json toJson () const;
   /** \brief Reads what toJson () wrote and validates it.

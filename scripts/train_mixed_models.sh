@@ -1,0 +1,127 @@
+#!/usr/bin/env bash
+# Trains a forest and three detectors (fused, AGEX-only, sliding window) on the mix issue #33
+# asks for (doc/results.md, "Every distance, every camera"); the candidate recipe for the
+# bundled models, which are not retrained with it yet. Each model sees the same mix of
+#   - synthetic people (MakeHuman bodies of sampled shapes, the training part of the pose split
+#     of scripts/pose_split.sh, whole scenes with 1-3 people at 0.8-6 m, with and without floor
+#     and background, cut by the borders, close-range upper bodies) through every sensor model
+#     and resolution, and
+#   - the real Bonn frames of sequences 1-8 as recorded (both views) and re-projected
+#     (agex_reproject): moved to 0.8-5 m, sideways, up and down, the camera tilted, rendered
+#     by the Kinect v1 at 640x480 and 320x240, the Kinect v2-like camera and the Bonn view.
+# The fused detector's classifier is trained on forest features cross-fitted over four groups
+# (Bonn sequence pairs with their re-projected copies, and a quarter of the synthetic sets
+# each): every group's frames are labelled by a forest trained without them.
+# Usage: scripts/train_mixed_models.sh OUT_DIR [BUILD_DIR] [WORK_DIR]
+# Writes OUT_DIR/agex_bonn.yml (fused, naming agex_bonn_forest.agexforest beside it),
+# agex_bonn_agex.yml and agex_bonn_sw.yml. Stages are checkpoints: a rerun with the same
+# WORK_DIR skips the datasets and forests already there. AGEX_TRAIN_SCALE (0.05-1, default 1)
+# renders that fraction of the synthetic frames and moves only the keyframes: a quick trial
+# (0.1: about 20 minutes on 2 cores). Existing models in OUT_DIR are kept unless
+# AGEX_TRAIN_FORCE=1.
+set -euo pipefail
+ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+MODELS=${1:?usage: train_mixed_models.sh OUT_DIR [BUILD_DIR] [WORK_DIR]}
+BIN="${2:-$ROOT/build}/bin"
+WORK="${3:-$(mktemp -d)}"
+SHARED="$ROOT/../shared/data"
+# AGEX_TRAIN_SCALE (0.05-1, default 1): a fraction of the synthetic frames, for a quick trial.
+SCALE="${AGEX_TRAIN_SCALE:-1}"
+python3 -c "import sys; s = float(sys.argv[1]); sys.exit(0 if 0.05 <= s <= 1 else 1)" "$SCALE" 2> /dev/null ||
+  { echo "train_mixed_models: AGEX_TRAIN_SCALE must be 0.05-1, not '$SCALE'" >&2; exit 1; }
+frames () { python3 -c "import sys; print(max(20, round($1 * float(sys.argv[1]))))" "$SCALE"; }
+for need in "$SHARED/bonn" "$SHARED/mocap/cmu_cc" "$SHARED/mocap/cmu_poses" "$SHARED/makehuman/targets"; do
+  [ -d "$need" ] || { echo "train_mixed_models: $need is missing (see ../shared/README.md)" >&2; exit 1; }
+done
+if [ "${AGEX_TRAIN_FORCE:-0}" != 1 ]; then
+  for f in agex_bonn.yml agex_bonn_forest.agexforest agex_bonn_agex.yml agex_bonn_sw.yml; do
+    [ -e "$MODELS/$f" ] && { echo "train_mixed_models: $MODELS/$f exists (AGEX_TRAIN_FORCE=1 replaces it)" >&2; exit 1; }
+  done
+fi
+mkdir -p "$WORK" "$MODELS"
+stamp () { echo "train_mixed_models: $(date -u +%H:%M:%S) $*"; }
+once () {  # once NAME COMMAND...: runs COMMAND unless NAME (a dataset or a model) exists
+  local name=$1; shift
+  [ -e "$WORK/$name/dataset.json" ] || [ -f "$WORK/$name" ] && return 0
+  stamp "$name"
+  "$@" > "$WORK/${name%.*}.log" 2>&1 || { echo "train_mixed_models: $name failed (log: $WORK/${name%.*}.log)" >&2; return 1; }
+}
+
+# 1. Real frames: both views as recorded, and re-projected.
+for view in portrait full; do
+  once "bonn-$view" "$BIN/agex_convert" bonn --input "$SHARED/bonn" --output "$WORK/bonn-$view" --view "$view"
+done
+MOVE=(--dataset "$WORK/bonn-full" --sideways 0.6 --vertical 0.3 --tilt-deg 10)
+# A trial (AGEX_TRAIN_SCALE below 1) moves the keyframes only.
+python3 -c "import sys; sys.exit(0 if float(sys.argv[1]) < 1 else 1)" "$SCALE" && MOVE+=(--keyframes-only)
+( once moved-k640 "$BIN/agex_reproject" "${MOVE[@]}" --distance-range 0.8:5 --sensor kinect --seed 11 --output "$WORK/moved-k640"
+  once moved-bonn "$BIN/agex_reproject" "${MOVE[@]}" --distance-range 1.2:4 --sensor bonn --seed 13 --output "$WORK/moved-bonn" ) &
+first=$!
+( once moved-k320 "$BIN/agex_reproject" "${MOVE[@]}" --distance-range 0.8:5 --sensor kinect --resolution 320x240 --seed 12 --output "$WORK/moved-k320"
+  once moved-k2 "$BIN/agex_reproject" "${MOVE[@]}" --distance-range 0.8:5 --sensor kinect2 --seed 14 --output "$WORK/moved-k2" ) &
+second=$!
+wait "$first" && wait "$second"
+
+# 2. Synthetic people from the training part of the pose split (held-out subjects never seen).
+bash "$ROOT/scripts/pose_split.sh" "$WORK/poses" > /dev/null
+M="$SHARED/mocap"
+SHAPES=(--body-mesh "$SHARED/makehuman" --body-shapes --subjects 24)
+BANK=(--pose-dir "$WORK/poses/train/cmu_cc" --pose-dir "$WORK/poses/train/cmu_poses" --procedural-poses 2000 --thin-poses 0.05)
+FIVE=(--motion "$M/cmu_02_01.bvh" "$M/cmu_05_06.bvh" "$M/cmu_131_01.bvh" "$M/cmu_131_02.bvh" "$M/cmu_131_03.bvh")
+synth () { local name=$1; shift; once "$name" "$BIN/agex_synth" "${SHAPES[@]}" "$@" --output "$WORK/$name"; }
+( synth bank_k640 "${BANK[@]}" --layout whole --people 3 --sensor kinect --frames $(frames 400) --seed 101
+  synth bank_k2 "${BANK[@]}" --layout whole --people 3 --sensor kinect2 --frames $(frames 200) --seed 103
+  synth five_k640 "${FIVE[@]}" --layout whole --people 3 --sensor kinect --kinect-window 9 --frames $(frames 200) --seed 105 ) &
+first=$!
+( synth bank_k320 "${BANK[@]}" --layout whole --people 3 --sensor kinect --resolution 320x240 --frames $(frames 400) --seed 102
+  synth bank_bonn "${BANK[@]}" --sensor bonn --frames $(frames 300) --seed 104
+  synth five_bonn "${FIVE[@]}" --sensor bonn --frames $(frames 200) --seed 106
+  synth five_k320 "${FIVE[@]}" --layout whole --people 3 --sensor kinect --resolution 320x240 --kinect-window 9 \
+    --frames $(frames 200) --seed 107 ) &
+second=$!
+wait "$first" && wait "$second"
+
+# Four groups for cross-fitting: Bonn sequence pairs (as recorded and moved) and synthetic sets.
+REAL=(bonn-full bonn-portrait moved-k640 moved-k320 moved-k2 moved-bonn)
+GROUP_SEQS=(1,2 3,4 5,6 7,8)
+GROUP_SYNTH=("bank_k640 five_bonn" "bank_k320 five_k640" "bank_k2 five_k320" "bank_bonn")
+group_args () {  # group_args G [FOREST]: the --dataset (and --dataset-forest) flags of group G
+  local g=$1 forest=${2:-} d
+  for d in "${REAL[@]}"; do
+    echo --dataset "$WORK/$d@${GROUP_SEQS[$g]}"
+    [ -n "$forest" ] && echo --dataset-forest "$WORK/$d@${GROUP_SEQS[$g]}=$forest"
+  done
+  for d in ${GROUP_SYNTH[$g]}; do
+    echo --dataset "$WORK/$d"
+    [ -n "$forest" ] && echo --dataset-forest "$WORK/$d=$forest"
+  done
+  return 0
+}
+all_args () { local g; for g in 0 1 2 3; do group_args "$g"; done; }
+
+# 3. The forest on everything, and one without each group for cross-fitting.
+FOREST_FLAGS=(--hand-reach 0.12 --threads 2)
+once forest.agexforest "$BIN/agex_train_forest" $(all_args) "${FOREST_FLAGS[@]}" --out "$WORK/forest.agexforest"
+fold_args=()
+for g in 0 1 2 3; do
+  rest=()
+  for h in 0 1 2 3; do [ "$h" = "$g" ] || rest+=($(group_args "$h")); done
+  once "forest_without_$g.agexforest" "$BIN/agex_train_forest" "${rest[@]}" "${FOREST_FLAGS[@]}" --trees 2 \
+    --pixels-per-frame 500 --out "$WORK/forest_without_$g.agexforest"
+  fold_args+=($(group_args "$g" "$WORK/forest_without_$g.agexforest"))
+done
+
+# 4. The detectors, written into OUT_DIR (the fused model names its forest relative to
+# itself, so the forest goes there first).
+cp "$WORK/forest.agexforest" "$MODELS/agex_bonn_forest.agexforest"
+RECIPE=(--k 16 --weak-count 200 --fragments 100 --random-negatives 3)
+stamp fused
+"$BIN/agex_train" --fused --forest "$MODELS/agex_bonn_forest.agexforest" "${fold_args[@]}" "${RECIPE[@]}" \
+  --out "$MODELS/agex_bonn.yml" > "$WORK/fused.log" 2>&1
+stamp agex-only
+"$BIN/agex_train" $(all_args) "${RECIPE[@]}" --out "$MODELS/agex_bonn_agex.yml" > "$WORK/agex.log" 2>&1
+stamp sliding-window
+"$BIN/agex_train" --sliding-window $(all_args) --weak-count 300 --fragments 150 --out "$MODELS/agex_bonn_sw.yml" \
+  > "$WORK/sw.log" 2>&1
+stamp done
+ls -l "$MODELS"/agex_bonn*

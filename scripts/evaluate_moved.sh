@@ -22,7 +22,12 @@ done
 BIN="$BUILD/bin"
 SHARED="$ROOT/../shared/data"
 [ -d "$SHARED/bonn" ] || { echo "evaluate_moved: $SHARED/bonn is missing (the Bonn frames of ../shared)" >&2; exit 1; }
-mkdir -p "$OUT"
+# OUT_DIR is this script's own: an existing folder of other things is refused, never written into.
+if [ -d "$OUT" ] && [ -n "$(ls -A "$OUT")" ] && [ ! -e "$OUT/.evaluate_moved" ]; then
+  echo "evaluate_moved: $OUT exists and is not an earlier evaluate_moved folder" >&2; exit 1
+fi
+[ -e "$OUT" ] && [ ! -d "$OUT" ] && { echo "evaluate_moved: $OUT is a file" >&2; exit 1; }
+mkdir -p "$OUT" && touch "$OUT/.evaluate_moved"
 [ -d "$OUT/bonn-full" ] || "$BIN/agex_convert" bonn --input "$SHARED/bonn" --output "$OUT/bonn-full" --view full \
   --sequences "$SEQS" > /dev/null
 for d in 3 4 5; do

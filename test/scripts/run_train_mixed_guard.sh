@@ -1,0 +1,35 @@
+#!/usr/bin/env bash
+# scripts/train_mixed_models.sh and evaluate_moved.sh write only what is theirs.
+# train_mixed_models.sh never writes over models already in its output folder (unless
+# AGEX_TRAIN_FORCE=1) and refuses a bad AGEX_TRAIN_SCALE, before any work. Skips (77) without
+# ../shared's data (the script checks it first).
+# Usage: run_train_mixed_guard.sh SOURCE_DIR WORK_DIR
+set -u
+src=$1 work=$2
+shared="$src/../shared/data"
+for need in bonn mocap/cmu_cc mocap/cmu_poses makehuman/targets; do
+  [ -d "$shared/$need" ] || { echo "SKIP: $shared/$need is missing"; exit 77; }
+done
+failures=0
+fail() { echo "FAIL: $*"; failures=$((failures + 1)); }
+rm -rf "$work" && mkdir -p "$work/out" || exit 1
+echo "someone's model" > "$work/out/agex_bonn_sw.yml"
+cp "$work/out/agex_bonn_sw.yml" "$work/orig"
+bash "$src/scripts/train_mixed_models.sh" "$work/out" "$work/no_build" "$work/w" 2> "$work/err" && fail "it ran over an existing model"
+cmp -s "$work/out/agex_bonn_sw.yml" "$work/orig" || fail "the existing model changed"
+grep -q "exists" "$work/err" || fail "the refusal does not say why: $(cat "$work/err")"
+[ -e "$work/w" ] && fail "it started work before refusing"
+AGEX_TRAIN_SCALE=7 bash "$src/scripts/train_mixed_models.sh" "$work/new" "$work/no_build" "$work/w2" 2> "$work/err2" \
+  && fail "AGEX_TRAIN_SCALE=7 was accepted"
+grep -q "AGEX_TRAIN_SCALE" "$work/err2" || fail "the scale refusal does not name it: $(cat "$work/err2")"
+# scripts/evaluate_moved.sh writes only into a folder of its own.
+mkdir -p "$work/mine" && echo "a result of mine" > "$work/mine/agex_bonn_kinect_3m.json"
+cp "$work/mine/agex_bonn_kinect_3m.json" "$work/mine.orig"
+bash "$src/scripts/evaluate_moved.sh" "$work/mine" 7,8 "$src/data/models/agex_bonn.yml" -- "$work/no_build" \
+  2> "$work/err3" && fail "evaluate_moved wrote into a folder of other things"
+cmp -s "$work/mine/agex_bonn_kinect_3m.json" "$work/mine.orig" || fail "evaluate_moved changed a file it did not write"
+echo x > "$work/afile"
+bash "$src/scripts/evaluate_moved.sh" "$work/afile" 7,8 "$src/data/models/agex_bonn.yml" -- "$work/no_build" \
+  2> /dev/null && fail "evaluate_moved took a file for its folder"
+[ "$(cat "$work/afile")" = x ] || fail "evaluate_moved changed a file given as its folder"
+[ "$failures" = 0 ] && echo "train_mixed_models and evaluate_moved guards: all checks passed"

@@ -17,8 +17,10 @@
 # agex_bonn_agex.yml and agex_bonn_sw.yml. Stages are checkpoints: a rerun with the same
 # WORK_DIR skips the datasets and forests already there. AGEX_TRAIN_SCALE (0.05-1, default 1)
 # renders that fraction of the synthetic frames and moves only the keyframes: a quick trial
-# (0.1: about 20 minutes on 2 cores). Existing models in OUT_DIR are kept unless
-# AGEX_TRAIN_FORCE=1.
+# (0.1: about 20 minutes on 2 cores). AGEX_TRAIN_HOLDOUT (Bonn sequences, e.g. 7,8) leaves
+# those sequences and their re-projected copies out of every model, for a held-out evaluation;
+# the rendered datasets are shared with other runs in the same WORK_DIR. Existing models in
+# OUT_DIR are kept unless AGEX_TRAIN_FORCE=1.
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 MODELS=${1:?usage: train_mixed_models.sh OUT_DIR [BUILD_DIR] [WORK_DIR]}
@@ -29,6 +31,11 @@ SHARED="$ROOT/../shared/data"
 SCALE="${AGEX_TRAIN_SCALE:-1}"
 python3 -c "import sys; s = float(sys.argv[1]); sys.exit(0 if 0.05 <= s <= 1 else 1)" "$SCALE" 2> /dev/null ||
   { echo "train_mixed_models: AGEX_TRAIN_SCALE must be 0.05-1, not '$SCALE'" >&2; exit 1; }
+HOLDOUT="${AGEX_TRAIN_HOLDOUT:-}"
+[[ -z "$HOLDOUT" || "$HOLDOUT" =~ ^[1-8](,[1-8])*$ ]] ||
+  { echo "train_mixed_models: AGEX_TRAIN_HOLDOUT must list Bonn sequences 1-8 (e.g. 7,8), not '$HOLDOUT'" >&2; exit 1; }
+# Forests trained without the held-out sequences get their own names in WORK_DIR.
+TAG=${HOLDOUT:+_without_${HOLDOUT//,/}}
 frames () { python3 -c "import sys; print(max(20, round($1 * float(sys.argv[1]))))" "$SCALE"; }
 for need in "$SHARED/bonn" "$SHARED/mocap/cmu_cc" "$SHARED/mocap/cmu_poses" "$SHARED/makehuman/targets"; do
   [ -d "$need" ] || { echo "train_mixed_models: $need is missing (see ../shared/README.md)" >&2; exit 1; }
@@ -83,11 +90,14 @@ wait "$first" && wait "$second"
 
 # Four groups for cross-fitting: Bonn sequence pairs (as recorded and moved) and synthetic sets.
 REAL=(bonn-full bonn-portrait moved-k640 moved-k320 moved-k2 moved-bonn)
-GROUP_SEQS=(1,2 3,4 5,6 7,8)
+GROUP_SEQS=()
+for pair in 1,2 3,4 5,6 7,8; do  # each pair less the held-out sequences (may be empty)
+  GROUP_SEQS+=("$(echo "$pair" | tr ',' '\n' | grep -vxF -f <(echo "${HOLDOUT:-0}" | tr ',' '\n') | paste -sd, || true)")
+done
 GROUP_SYNTH=("bank_k640 five_bonn" "bank_k320 five_k640" "bank_k2 five_k320" "bank_bonn")
 group_args () {  # group_args G [FOREST]: the --dataset (and --dataset-forest) flags of group G
   local g=$1 forest=${2:-} d
-  for d in "${REAL[@]}"; do
+  [ -n "${GROUP_SEQS[$g]}" ] && for d in "${REAL[@]}"; do
     echo --dataset "$WORK/$d@${GROUP_SEQS[$g]}"
     [ -n "$forest" ] && echo --dataset-forest "$WORK/$d@${GROUP_SEQS[$g]}=$forest"
   done
@@ -101,27 +111,34 @@ all_args () { local g; for g in 0 1 2 3; do group_args "$g"; done; }
 
 # 3. The forest on everything, and one without each group for cross-fitting.
 FOREST_FLAGS=(--hand-reach 0.12 --threads 2)
-once forest.agexforest "$BIN/agex_train_forest" $(all_args) "${FOREST_FLAGS[@]}" --out "$WORK/forest.agexforest"
+once "forest$TAG.agexforest" "$BIN/agex_train_forest" $(all_args) "${FOREST_FLAGS[@]}" --out "$WORK/forest$TAG.agexforest"
 fold_args=()
 for g in 0 1 2 3; do
   rest=()
   for h in 0 1 2 3; do [ "$h" = "$g" ] || rest+=($(group_args "$h")); done
-  once "forest_without_$g.agexforest" "$BIN/agex_train_forest" "${rest[@]}" "${FOREST_FLAGS[@]}" --trees 2 \
-    --pixels-per-frame 500 --out "$WORK/forest_without_$g.agexforest"
-  fold_args+=($(group_args "$g" "$WORK/forest_without_$g.agexforest"))
+  once "forest${TAG}_group_$g.agexforest" "$BIN/agex_train_forest" "${rest[@]}" "${FOREST_FLAGS[@]}" --trees 2 \
+    --pixels-per-frame 500 --out "$WORK/forest${TAG}_group_$g.agexforest"
+  fold_args+=($(group_args "$g" "$WORK/forest${TAG}_group_$g.agexforest"))
 done
 
 # 4. The detectors, written into OUT_DIR (the fused model names its forest relative to
 # itself, so the forest goes there first).
-cp "$WORK/forest.agexforest" "$MODELS/agex_bonn_forest.agexforest"
+cp "$WORK/forest$TAG.agexforest" "$MODELS/agex_bonn_forest.agexforest"
 RECIPE=(--k 16 --weak-count 200 --fragments 100 --random-negatives 3)
-stamp fused
+# agex_train uses one core: the three detectors train side by side.
+stamp "fused, AGEX-only and sliding-window detectors"
 "$BIN/agex_train" --fused --forest "$MODELS/agex_bonn_forest.agexforest" "${fold_args[@]}" "${RECIPE[@]}" \
-  --out "$MODELS/agex_bonn.yml" > "$WORK/fused.log" 2>&1
-stamp agex-only
-"$BIN/agex_train" $(all_args) "${RECIPE[@]}" --out "$MODELS/agex_bonn_agex.yml" > "$WORK/agex.log" 2>&1
-stamp sliding-window
+  --out "$MODELS/agex_bonn.yml" > "$WORK/fused$TAG.log" 2>&1 &
+fused=$!
+"$BIN/agex_train" $(all_args) "${RECIPE[@]}" --out "$MODELS/agex_bonn_agex.yml" > "$WORK/agex$TAG.log" 2>&1 &
+agex_only=$!
 "$BIN/agex_train" --sliding-window $(all_args) --weak-count 300 --fragments 150 --out "$MODELS/agex_bonn_sw.yml" \
-  > "$WORK/sw.log" 2>&1
+  > "$WORK/sw$TAG.log" 2>&1 &
+sliding=$!
+failed=0
+for job in "$fused:fused$TAG" "$agex_only:agex$TAG" "$sliding:sw$TAG"; do
+  wait "${job%%:*}" || { echo "train_mixed_models: ${job#*:} failed (log: $WORK/${job#*:}.log)" >&2; failed=1; }
+done
+[ "$failed" = 0 ]
 stamp done
 ls -l "$MODELS"/agex_bonn*

@@ -9,6 +9,9 @@
 # (scripts/bonn_table.py). Folds already trained or scored in OUT are kept, so an interrupted
 # run resumes. About 20 minutes per fold on 2 cores. The converted Bonn datasets (both views)
 # go to OUT/../bonn-datasets, shared by the folds beside OUT.
+# AGEX_EVAL_RECIPE=mixed trains the fold's models with scripts/train_mixed_models.sh instead
+# (synthetic people and re-projected frames, TEST's sequences and their moved copies left out;
+# its rendered datasets go to OUT/../mixed-work, shared by the folds): about 70 minutes a fold.
 #   scripts/evaluate_bonn.sh OUT TEST [BUILD_DIR]      e.g. OUT=/tmp/split TEST=7,8
 # Leave-one-sequence-out: for s in 1 2 3 4 5 6 7 8; do scripts/evaluate_bonn.sh /tmp/loso/$s $s; done
 #                         scripts/bonn_table.py /tmp/loso/[0-9]*
@@ -21,6 +24,9 @@ PCL_FORESTS="$ROOT/../shared/data/pcl_people"
 [ -d "$BONN" ] || { echo "evaluate_bonn: $BONN is missing (the Bonn frames of ../shared)" >&2; exit 1; }
 [ -d "$PCL_FORESTS" ] || { echo "evaluate_bonn: $PCL_FORESTS is missing (PCL's forests of ../shared)" >&2; exit 1; }
 [[ $TEST =~ ^[1-8](,[1-8])*$ ]] || { echo "evaluate_bonn: TEST must be Bonn sequences such as 7,8, not '$TEST'" >&2; exit 1; }
+RECIPE_NAME=${AGEX_EVAL_RECIPE:-bonn}
+[[ $RECIPE_NAME = bonn || $RECIPE_NAME = mixed ]] ||
+  { echo "evaluate_bonn: AGEX_EVAL_RECIPE must be bonn or mixed, not '$RECIPE_NAME'" >&2; exit 1; }
 mkdir -p "$OUT"
 DATA="$OUT/../bonn-datasets"
 for view in portrait full; do
@@ -34,12 +40,26 @@ RECIPE=(--k 16 --weak-count 200 --fragments 100 --random-negatives 3)
 # Writes to a temporary name first, so that an interrupted step is redone, not kept half-made.
 made () { [ -s "$1" ]; }
 
+case "$RECIPE_NAME" in
+  bonn) ;;
+  mixed)
+    if ! made "$OUT/fused.yml"; then
+      AGEX_TRAIN_HOLDOUT=$TEST AGEX_TRAIN_FORCE=1 bash "$ROOT/scripts/train_mixed_models.sh" "$OUT/mixed" "${BIN%/bin}" \
+        "$OUT/../mixed-work"
+      # The fused model names its forest beside itself (agex_bonn_forest.agexforest).
+      cp "$OUT/mixed/agex_bonn_forest.agexforest" "$OUT/agex_bonn_forest.agexforest"
+      cp "$OUT/mixed/agex_bonn_forest.agexforest" "$OUT/forest.agexforest"
+      cp "$OUT/mixed/agex_bonn_agex.yml" "$OUT/agex.yml"
+      cp "$OUT/mixed/agex_bonn_sw.yml" "$OUT/sw.yml"
+      cp "$OUT/mixed/agex_bonn.yml" "$OUT/fused.tmp.yml" && mv "$OUT/fused.tmp.yml" "$OUT/fused.yml"
+    fi ;;
+esac
 made "$OUT/forest.agexforest" || { "$BIN/agex_train_forest" $(both "$TRAIN") "${FOREST_FLAGS[@]}" --out "$OUT/forest.tmp.agexforest" \
   && mv "$OUT/forest.tmp.agexforest" "$OUT/forest.agexforest"; }
 # Cross-fitting as for the bundled model: the training sequences in groups of two, each
 # group's frames labelled by a forest trained without it.
 fold_args=()
-groups=$(echo "$TRAIN" | tr ',' '\n' | paste -d, - - | sed 's/,$//')
+made "$OUT/fused.yml" && groups="" || groups=$(echo "$TRAIN" | tr ',' '\n' | paste -d, - - | sed 's/,$//')
 for group in $groups; do
   rest=$(echo "$TRAIN" | tr ',' '\n' | grep -vxF -f <(echo "$group" | tr ',' '\n') | paste -sd,)
   f="$OUT/forest_without_${group//,/}.agexforest"

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # scripts/train_mixed_models.sh and evaluate_moved.sh write only what is theirs.
 # train_mixed_models.sh never writes over models already in its output folder (unless
-# AGEX_TRAIN_FORCE=1) and refuses a bad AGEX_TRAIN_SCALE, before any work. Skips (77) without
+# AGEX_TRAIN_FORCE=1) and refuses a bad AGEX_TRAIN_SCALE or AGEX_TRAIN_HOLDOUT, before any work;
+# evaluate_bonn.sh refuses an unknown AGEX_EVAL_RECIPE before making its folder. Skips (77) without
 # ../shared's data (the script checks it first).
 # Usage: run_train_mixed_guard.sh SOURCE_DIR WORK_DIR
 set -u
@@ -22,6 +23,14 @@ grep -q "exists" "$work/err" || fail "the refusal does not say why: $(cat "$work
 AGEX_TRAIN_SCALE=7 bash "$src/scripts/train_mixed_models.sh" "$work/new" "$work/no_build" "$work/w2" 2> "$work/err2" \
   && fail "AGEX_TRAIN_SCALE=7 was accepted"
 grep -q "AGEX_TRAIN_SCALE" "$work/err2" || fail "the scale refusal does not name it: $(cat "$work/err2")"
+AGEX_TRAIN_HOLDOUT=9 bash "$src/scripts/train_mixed_models.sh" "$work/new" "$work/no_build" "$work/w3" 2> "$work/err4" \
+  && fail "AGEX_TRAIN_HOLDOUT=9 (no such Bonn sequence) was accepted"
+grep -q "AGEX_TRAIN_HOLDOUT" "$work/err4" || fail "the hold-out refusal does not name it: $(cat "$work/err4")"
+[ -e "$work/w3" ] && fail "it started work before refusing the hold-out"
+AGEX_EVAL_RECIPE=forest bash "$src/scripts/evaluate_bonn.sh" "$work/fold" 7,8 "$work/no_build" 2> "$work/err5" \
+  && fail "evaluate_bonn took an unknown recipe"
+grep -q "AGEX_EVAL_RECIPE" "$work/err5" || fail "the recipe refusal does not name it: $(cat "$work/err5")"
+[ -e "$work/fold" ] && fail "evaluate_bonn made its folder before refusing the recipe"
 # scripts/evaluate_moved.sh writes only into a folder of its own.
 mkdir -p "$work/mine" && echo "a result of mine" > "$work/mine/agex_bonn_kinect_3m.json"
 cp "$work/mine/agex_bonn_kinect_3m.json" "$work/mine.orig"

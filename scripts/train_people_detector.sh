@@ -32,5 +32,5 @@ HELD_OUT=$(for i in $(seq 5 5 900); do printf "%04d.jpg " "$i"; done)
 # The shape predictor of this run is a stub (agex_landmarks_train always trains one).
 "$BIN/agex_landmarks_train" --dataset "$WORK/ccp_train.xml" --out "$WORK/stub.dat" --oversampling 1 --cascade-depth 1 \
   --trees-per-level 1 --threads 1 --detector-out "$OUT" --detector-c 20 \
-  --detector-crops "$INRIA" --detector-crops-held-out 0 --detector-crops-min-height 72 --detector-crops-max-height 200 \
+  --detector-crops "$INRIA" --detector-crops-box 24,32,48,96 --detector-crops-held-out 0 --detector-crops-min-height 72 --detector-crops-max-height 200 \
   --detector-backgrounds 1 --detector-window-width 40 --detector-window-height 80 --detector-scale 1.25

@@ -234,7 +234,7 @@ TEST (PastedCrops, InriaCropsInShared)
 {
   const std::string folder = agex_test::sharedData ("people2d/inria_pos/images");
   AGEX_REQUIRE_SHARED_FILE (folder, "INRIA's person crops (../shared/data/people2d/inria_pos)");
-  const agex::PeopleCrops crops = agex::readPeopleCrops (folder, cv::Rect (16, 16, 64, 128));
+  const agex::PeopleCrops crops = agex::readPeopleCrops (folder, cv::Rect (24, 32, 48, 96));
   EXPECT_EQ (crops.images.size (), 1208u);
   EXPECT_EQ (crops.images.front ().size (), cv::Size (96, 160));
   EXPECT_TRUE (std::is_sorted (crops.names.begin (), crops.names.end ()));

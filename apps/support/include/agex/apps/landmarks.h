@@ -38,7 +38,7 @@ boost::program_options::options_description detectorTrainerOptions (PeopleDetect
 struct PeopleCropChoice
 {
   std::string folder;  ///< empty: no crops
-  std::string box = "16,16,64,128";  ///< x,y,width,height (INRIA's 96x160 crops)
+  std::string box = "24,32,48,96";  ///< x,y,width,height: INRIA's 96x160 crops hold a 64x128 window at 16,16 whose middle 0.75 is the person
   int folds = 5;
   int fold = -1;  ///< training: this fold is left out; scoring: only this fold is used (-1: all)
 };

@@ -28,6 +28,10 @@ main (int argc, char **argv)
     if (!flags.json.empty ())
       agex::apps::checkOutputPath (flags.json, "agex_landmarks_eval report",
                                    agex::apps::jsonReportWith ({"dataset", "detector"}), inputs.read);
+    flags.settings.crop_params.min_background_height = flags.settings.crop_params.max_background_height;
+    const std::shared_ptr<const agex::PeopleCrops> crops =
+      agex::apps::loadPeopleCrops (flags.crops, true, flags.settings.crop_which);
+    flags.settings.crops = crops.get ();
     const bool train_detector = flags.train_detector && !flags.detector.none;
     std::unique_ptr<agex::PeopleDetector> detector;
     if (!flags.detector.none && !flags.train_detector)

@@ -11,6 +11,7 @@
 #include <chrono>
 #include <filesystem>
 #include <iostream>
+#include <memory>
 #include <numeric>
 
 namespace po = boost::program_options;
@@ -22,6 +23,7 @@ main (int argc, char **argv)
   std::string model_path, detector_path;
   agex::ShapePredictorTrainingParams shape_params;
   agex::PeopleDetectorTraining detector_training;
+  agex::apps::PeopleCropChoice crop_choice;
   po::options_description general ("agex_landmarks_train --dataset XML --out MODEL [--detector-out FILE] [options]\n"
                                    "Trains the 180-landmark contour shape predictor (and the people detector)");
   general.add_options () ("help,h", "show this help")
@@ -30,6 +32,7 @@ main (int argc, char **argv)
     ("detector-out", po::value (&detector_path), "also train the people detector and write it here");
   po::options_description all;
   all.add (general).add (agex::apps::shapeTrainerOptions (shape_params)).add (agex::apps::detectorTrainerOptions (detector_training));
+  all.add (agex::apps::detectorCropOptions (crop_choice, detector_training));
   try
   {
     if (!agex::apps::parseCommandLine (argc, argv, all, {}))
@@ -39,6 +42,14 @@ main (int argc, char **argv)
       throw std::runtime_error (detector_path + ": --detector-out and --out name the same file");
     const agex::apps::LandmarkInputs inputs = agex::apps::loadLandmarkInputs (dataset_paths, {}, {}, {model_path, detector_path});
     agex::apps::checkLandmarkModelOutputs (model_path, detector_path, inputs.read);
+    if (!crop_choice.folder.empty () && detector_path.empty ())
+      throw std::runtime_error ("--detector-crops trains the people detector: give --detector-out too");
+    const std::shared_ptr<const agex::PeopleCrops> crops =
+      agex::apps::loadPeopleCrops (crop_choice, false, detector_training.crop_which);
+    detector_training.crops = crops.get ();
+    if (crops)
+      std::cout << crop_choice.folder << ": " << detector_training.crop_which.size () << " of " << crops->images.size ()
+                << " person crops for the detector\n";
     const auto &images = inputs.images;
     std::vector<std::size_t> all_images (images.size ());
     std::iota (all_images.begin (), all_images.end (), 0);

@@ -85,6 +85,13 @@ LandmarkEvaluation::addPastedDetection (const cv::Mat &grey, const std::vector<c
 }
 
 void
+LandmarkEvaluation::addCropDetection (const cv::Mat &grey, const std::vector<cv::Rect> &people,
+                                      const std::vector<cv::Rect> &ignored, const PeopleDetector &detector, double threshold)
+{
+  detect (crops_, grey, people, ignored, detector, threshold);
+}
+
+void
 LandmarkEvaluation::detect (DetectionScores &scores, const cv::Mat &grey, const std::vector<cv::Rect> &people,
                             const std::vector<cv::Rect> &ignored, const PeopleDetector &detector, double threshold) const
 {
@@ -173,6 +180,8 @@ LandmarkEvaluation::json () const
   doc.erase ("ms_per_image_detect");
   if (pasted_.images > 0)
     doc["pasted"] = pasted_.json (min_detection_height_);
+  if (crops_.images > 0)
+    doc["crops"] = crops_.json (min_detection_height_);
   return doc;
 }
 
@@ -205,6 +214,19 @@ evaluateLandmarks (const std::vector<AnnotatedImage> &images, const std::vector<
                                  settings.threshold);
     }
     doc["pasted"] = pasted.detectionJson ();
+  }
+  if (settings.crops && !settings.crop_which.empty () && detector)
+  {
+    LandmarkEvaluation crops;
+    crops.setMinDetectionHeight (settings.min_detection_height);
+    const PeopleImages composites = pasteCrops (images, test, *settings.crops, settings.crop_which, settings.crop_params);
+    for (std::size_t c = 0; c < composites.images.size (); ++c)
+    {
+      crops.addDetection (composites.images[c], composites.boxes[c], composites.ignore[c], *detector, settings.threshold);
+      pooled.addCropDetection (composites.images[c], composites.boxes[c], composites.ignore[c], *detector,
+                               settings.threshold);
+    }
+    doc["crops"] = crops.detectionJson ();
   }
   return doc;
 }

@@ -50,8 +50,9 @@ PeopleDetector
 trainPeopleDetector (const std::vector<AnnotatedImage> &images, const std::vector<std::size_t> &which,
                      const PeopleDetectorTraining &training, std::size_t *ignored)
 {
-  if (!training.paste_people && !training.originals)
-    throw std::runtime_error ("the people detector needs training images: the photos, the pasted people or both");
+  const bool with_crops = training.crops && !training.crop_which.empty ();
+  if (!training.paste_people && !training.originals && !with_crops)
+    throw std::runtime_error ("the people detector needs people to train on: the photos, the pasted people or crops");
   PeopleImages set;
   if (training.paste_people)
     set = pastedPeopleImages (images, which, training.pasted);
@@ -64,6 +65,18 @@ trainPeopleDetector (const std::vector<AnnotatedImage> &images, const std::vecto
         set.boxes.back ().push_back (person.tight_box);
       set.ignore.push_back (images[i].ignored);
     }
+  const auto append = [&set] (PeopleImages more) {
+    for (std::size_t i = 0; i < more.images.size (); ++i)
+    {
+      set.images.push_back (more.images[i]);
+      set.boxes.push_back (std::move (more.boxes[i]));
+      set.ignore.push_back (std::move (more.ignore[i]));
+    }
+  };
+  if (with_crops)
+    append (pasteCrops (images, which, *training.crops, training.crop_which, training.crop_params));
+  if (training.backgrounds)
+    append (peopleFreeImages (images, which, training.background_params));
   return PeopleDetector::train (set.images, set.boxes, set.ignore, training.params, ignored);
 }
 }  // namespace agex

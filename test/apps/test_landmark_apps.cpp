@@ -18,6 +18,7 @@
 
 #include <algorithm>
 #include <cstdlib>
+#include <map>
 #include <sstream>
 
 #include <sys/wait.h>
@@ -595,6 +596,59 @@ TEST (LandmarkApps, AnnotateCocoRleMasks)
 
 // The evaluation reports detection AP, false detections per image and the contour distance
 // per box height; a deeply nested dataset is refused by name (it crashed the app before).
+// --detector opencv-hog (issue 35) selects OpenCV's pretrained detector: the same people and
+// description as --opencv-detector, not a file of that name; with a trained detector's file it
+// would be an error, and the bundled detector's description differs.
+TEST (LandmarkApps, DetectorFlagSelectsOpenCvHog)
+{
+  const fs::path dir = tempDir ("opencv_hog");
+  const std::string image = std::string (AGEX_SOURCE_DIR) + "/data/images/five_people.jpg";
+  const std::string app = AGEX_LANDMARKS_EXECUTABLE;
+  std::string out, err;
+  std::map<std::string, nlohmann::json> docs;
+  for (const std::string flag : {"--detector opencv-hog", "--opencv-detector", ""})
+  {
+    const std::string json = (dir / ("people" + std::to_string (docs.size ()) + ".json")).string ();
+    ASSERT_EQ (runCapturing (app + " " + image + " " + flag + " --json " + json, dir, &out, &err), 0) << flag << ": " << err;
+    docs[flag] = nlohmann::json::parse (readAll (json));
+  }
+  const std::string hog = docs["--detector opencv-hog"]["detector"];
+  EXPECT_NE (hog.find ("OpenCV"), std::string::npos) << hog;
+  EXPECT_EQ (docs["--detector opencv-hog"]["detector"], docs["--opencv-detector"]["detector"]);
+  EXPECT_NE (docs[""]["detector"], docs["--opencv-detector"]["detector"]);
+  const auto boxes = [] (const nlohmann::json &doc) {
+    std::vector<nlohmann::json> out;
+    for (const auto &person : doc["frames"][0]["people"])
+      out.push_back (person["box"]);
+    return out;
+  };
+  EXPECT_FALSE (boxes (docs["--opencv-detector"]).empty ());
+  EXPECT_EQ (boxes (docs["--detector opencv-hog"]), boxes (docs["--opencv-detector"]));
+  // The evaluation app takes the same flag.
+  const std::string eval = AGEX_LANDMARKS_EVAL_EXECUTABLE;
+  agex::ImglabDataset dataset;
+  const Figure f = drawFigure (cv::Size (260, 260), cv::Point2f (130, 130), 1.2f, 0.4f, 0.3f);
+  ASSERT_TRUE (cv::imwrite ((dir / "figure.png").string (), cv::Mat (40 + f.mask / 2)));
+  const agex::ContourAnnotation a = agex::annotateContour (f.mask, agex::ContourAnchors ());
+  agex::ImglabImage entry;
+  entry.file = "figure.png";
+  agex::ImglabBox box;
+  box.rect = a.box;
+  for (int k = 0; k < agex::kContourLandmarkCount; ++k)
+    box.parts[agex::contourLandmarkName (k)] = a.landmarks[k];
+  entry.boxes.push_back (box);
+  dataset.images.push_back (entry);
+  agex::writeImglabDataset ((dir / "figure.xml").string (), dataset);
+  const std::string json = (dir / "eval.json").string ();
+  ASSERT_EQ (runCapturing (eval + " --dataset " + (dir / "figure.xml").string () + " --model " + AGEX_SOURCE_DIR +
+                             "/data/models/agex_contour_landmarks.dat --detector opencv-hog --json " + json,
+                           dir, &out, &err),
+             0)
+    << err;
+  EXPECT_EQ (nlohmann::json::parse (readAll (json))["detector"], docs["--opencv-detector"]["detector"]);
+  fs::remove_all (dir);
+}
+
 TEST (LandmarkApps, EvalReportsDetectionAndRefusesDeepFiles)
 {
   const fs::path dir = tempDir ("eval");

@@ -21,7 +21,9 @@
 #include <fstream>
 #include <iostream>
 #include <iterator>
+#include <memory>
 #include <regex>
+#include <sstream>
 #include <stdexcept>
 
 namespace po = boost::program_options;
@@ -98,6 +100,51 @@ detectorTrainerOptions (PeopleDetectorTraining &training)
   return options;
 }
 
+po::options_description
+detectorCropOptions (PeopleCropChoice &choice, PeopleDetectorTraining &training)
+{
+  PastedCropsParams &q = training.crop_params;
+  po::options_description options ("People detector training on person crops and people-free backgrounds");
+  options.add_options ()
+    ("detector-crops", po::value (&choice.folder), "a folder of person crops (e.g. INRIA's 96x160 positives) pasted into the "
+     "training photos, whose own people are then ignored")
+    ("detector-crops-box", po::value (&choice.box)->default_value (choice.box), "the person's box in every crop: x,y,width,height")
+    ("detector-crops-folds", po::value (&choice.folds)->default_value (choice.folds), "crop i is in fold i mod this")
+    ("detector-crops-held-out", po::value (&choice.fold)->default_value (choice.fold),
+     "leave this fold of the crops out of training (-1: train on all)")
+    ("detector-crops-per-image", po::value (&q.people_per_image)->default_value (q.people_per_image), "crops pasted into each photo")
+    ("detector-crops-min-height", po::value (&q.min_height)->default_value (q.min_height),
+     "pasted crops' people are at least this many pixels tall...")
+    ("detector-crops-max-height", po::value (&q.max_height)->default_value (q.max_height), "...and at most this")
+    ("detector-backgrounds", po::value (&training.backgrounds)->default_value (training.backgrounds),
+     "also train on the photos' people-free bands (each person's outline grown by --detector-background-dilation of its "
+     "height, cut away)")
+    ("detector-background-dilation", po::value (&training.background_params.dilation)->default_value (training.background_params.dilation),
+     "how far round each person (fraction of its height) the people-free bands stay clear");
+  return options;
+}
+
+std::shared_ptr<const PeopleCrops>
+loadPeopleCrops (const PeopleCropChoice &choice, bool test, std::vector<std::size_t> &which)
+{
+  which.clear ();
+  if (choice.folder.empty ())
+    return nullptr;
+  int x = 0, y = 0, w = 0, h = 0;
+  char c1 = 0, c2 = 0, c3 = 0;
+  std::istringstream in (choice.box);
+  if (!(in >> x >> c1 >> y >> c2 >> w >> c3 >> h) || c1 != ',' || c2 != ',' || c3 != ',' || !(in >> std::ws).eof ())
+    throw std::runtime_error ("the crops' person box '" + choice.box + "' is not x,y,width,height");
+  if (choice.folds < 2 || choice.folds > 100 || choice.fold < -1 || choice.fold >= choice.folds)
+    throw std::runtime_error ("crop folds: 2 to 100 folds and a fold from -1 (none) to folds - 1");
+  auto crops = std::make_shared<PeopleCrops> (readPeopleCrops (choice.folder, cv::Rect (x, y, w, h)));
+  which = test && choice.fold < 0 ? foldIndices (crops->images.size (), choice.folds, -1, false)
+                                  : foldIndices (crops->images.size (), choice.folds, choice.fold, test);
+  if (which.empty ())
+    throw std::runtime_error (choice.folder + ": no crop left in the chosen folds");
+  return crops;
+}
+
 std::string
 bundledPeopleDetectorFile ()
 {
@@ -109,8 +156,10 @@ detectorChoiceOptions (PeopleDetectorChoice &choice)
 {
   po::options_description options ("People detector");
   options.add_options () ("detector", po::value (&choice.path),
-                          "people detector file (default: the bundled one, trained on CCP)")
-    ("opencv-detector", po::bool_switch (&choice.opencv), "use OpenCV's pretrained HOG people detector instead")
+                          "people detector file (default: the bundled one), or 'opencv-hog': OpenCV's pretrained HOG "
+                          "people detector")
+    ("opencv-detector", po::bool_switch (&choice.opencv), "use OpenCV's pretrained HOG people detector instead (as "
+     "--detector opencv-hog)")
     ("opencv-scale", po::value (&choice.opencv_scale)->default_value (choice.opencv_scale),
      "with --opencv-detector: resize images by this first (smaller: faster, misses people shorter than about "
      "96/scale pixels)");
@@ -122,11 +171,12 @@ loadPeopleDetector (const PeopleDetectorChoice &choice)
 {
   if (!(choice.opencv_scale > 0.05 && choice.opencv_scale <= 4.0))
     throw std::runtime_error ("--opencv-scale must lie in (0.05, 4]");
-  if (!choice.opencv && choice.opencv_scale != 0.5)
-    throw std::runtime_error ("--opencv-scale applies to --opencv-detector only");
+  const bool opencv_hog = choice.path == kOpenCvHogName;
+  if (!choice.opencv && !opencv_hog && choice.opencv_scale != 0.5)
+    throw std::runtime_error ("--opencv-scale applies to OpenCV's detector only (--detector opencv-hog)");
   if (choice.opencv && !choice.path.empty ())
     throw std::runtime_error ("--detector and --opencv-detector name two detectors; give one");
-  if (choice.opencv)
+  if (choice.opencv || opencv_hog)
     return PeopleDetector::openCvDefault (choice.opencv_scale);
   return PeopleDetector::load (choice.path.empty () ? bundledPeopleDetectorFile () : choice.path);
 }
@@ -182,7 +232,20 @@ landmarkEvaluationOptions (LandmarkEvaluationFlags &f)
     ("json", po::value (&f.json), "write the results here")
     ("overlay-dir", po::value (&f.overlay_dir), "write a PNG per image with the predicted landmarks here")
     ("pasted", po::bool_switch (&f.settings.pasted),
-     "also score detection on the tested people pasted into each other's photos (several per image, many sizes)");
+     "also score detection on the tested people pasted into each other's photos (several per image, many sizes)")
+    ("crops", po::value (&f.crops.folder), "also score detection on these person crops (e.g. INRIA's) pasted into the tested "
+     "photos, whose own people are ignored (\"crops\" in the report)")
+    ("crops-box", po::value (&f.crops.box)->default_value (f.crops.box), "the person's box in every crop: x,y,width,height")
+    ("crops-folds", po::value (&f.crops.folds)->default_value (f.crops.folds), "crop i is in fold i mod this")
+    ("crops-fold", po::value (&f.crops.fold)->default_value (f.crops.fold), "score only this fold of the crops (-1: all)")
+    ("crops-per-image", po::value (&f.settings.crop_params.people_per_image)->default_value (f.settings.crop_params.people_per_image),
+     "crops pasted into each tested photo")
+    ("crops-min-height", po::value (&f.settings.crop_params.min_height)->default_value (f.settings.crop_params.min_height),
+     "pasted crops' people are at least this many pixels tall...")
+    ("crops-max-height", po::value (&f.settings.crop_params.max_height)->default_value (f.settings.crop_params.max_height),
+     "...and at most this")
+    ("crops-background-height", po::value (&f.settings.crop_params.max_background_height)->default_value (f.settings.crop_params.max_background_height),
+     "the tested photos are shrunk to this height (pixels) before the crops are pasted in");
   po::options_description all;
   all.add (general).add (detectorChoiceOptions (f.detector));
   all.add (shapeTrainerOptions (f.shape_params)).add (detectorTrainerOptions (f.detector_training));

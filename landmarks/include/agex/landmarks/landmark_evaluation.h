@@ -10,6 +10,7 @@
 #include <agex/landmarks/landmark_dataset.h>
 #include <agex/landmarks/landmark_training.h>
 #include <agex/landmarks/pasted_people.h>
+#include <agex/landmarks/people_crops.h>
 #include <agex/landmarks/people_detector.h>
 
 #include <nlohmann/json.hpp>
@@ -47,8 +48,12 @@ public:
                            const PeopleDetector &detector, double threshold);
   /** images, people, mean_error_px, mean_error_box_height, mean_error_shoulder_width,
     * mean_contour_distance_px / _box_height, detection_* (null where nothing was scored),
-    * ms_per_image, and "pasted" when pasted detections were added. */
+    * ms_per_image, and "pasted" / "crops" when pasted people / crops were scored. */
   nlohmann::json json () const;
+  /** As addDetection, into a third set of scores ("crops" in json ()): person crops pasted
+    * into the tested photos (pasteCrops). */
+  void addCropDetection (const cv::Mat &grey, const std::vector<cv::Rect> &people, const std::vector<cv::Rect> &ignored,
+                         const PeopleDetector &detector, double threshold);
   /** The detection fields of json () alone. */
   nlohmann::json detectionJson () const { return detection_.json (min_detection_height_); }
   double meanErrorPx () const { return people_ ? sum_error_px_ / people_ : 0.0; }
@@ -75,7 +80,7 @@ private:
   int min_detection_height_ = 0;
   double sum_error_px_ = 0, sum_error_box_ = 0, sum_error_shoulder_ = 0, sum_contour_ = 0, sum_contour_box_ = 0;
   double landmark_ms_ = 0;
-  DetectionScores detection_, pasted_;
+  DetectionScores detection_, pasted_, crops_;
 };
 
 /** How images are scored. */
@@ -88,6 +93,11 @@ struct LandmarkEvaluationSettings
     * show one person filling the frame say little about a detector on its own. */
   bool pasted = false;
   PastedPeopleParams pasted_params;
+  /** When not null: also score detection on crops[crop_which] pasted into the tested images
+    * (pasteCrops), under "crops". Not owned. */
+  const PeopleCrops *crops = nullptr;
+  std::vector<std::size_t> crop_which;
+  PastedCropsParams crop_params;
 };
 
 /** Called after each tested image is scored, with the shape predictor that scored it (in

@@ -7,6 +7,7 @@
 #include <agex/landmarks/contour_shape_predictor.h>
 #include <agex/landmarks/landmark_dataset.h>
 #include <agex/landmarks/pasted_people.h>
+#include <agex/landmarks/people_crops.h>
 #include <agex/landmarks/people_detector.h>
 
 #include <cstddef>
@@ -31,6 +32,15 @@ struct PeopleDetectorTraining
   /** Train on the photos as they are (too). */
   bool originals = true;
   PastedPeopleParams pasted;
+  /** Also train on the photos' people-free regions (peopleFreeImages: the people and a margin
+    * round them cut away), images where every window is a negative. */
+  bool backgrounds = false;
+  PeopleFreeParams background_params;
+  /** When not null: crops[crop_which] pasted into the training photos (pasteCrops), whose own
+    * people are then ignore regions. Not owned. */
+  const PeopleCrops *crops = nullptr;
+  std::vector<std::size_t> crop_which;
+  PastedCropsParams crop_params;
 };
 
 /** \brief The images[which] with people pasted into each other's photos (agex::pastePeople):
@@ -39,9 +49,11 @@ PeopleImages pastedPeopleImages (const std::vector<AnnotatedImage> &images, cons
                                  const PastedPeopleParams &params);
 
 /** \brief Trains the people detector on images[which]: the pasted people and/or the photos as
-  * they are (people are their outlines' boxes, ignore boxes ignore regions). Boxes the window
+  * they are (people are their outlines' boxes, ignore boxes ignore regions), the crops pasted
+  * into the photos and the photos' people-free regions, as training asks. Boxes the window
   * cannot match are counted in *ignored (PeopleDetector::train).
-  * \throws std::runtime_error when training asks for neither the photos nor the pasted people */
+  * \throws std::runtime_error when training asks for no people at all (neither the photos, the
+  * pasted people nor any crop) */
 PeopleDetector trainPeopleDetector (const std::vector<AnnotatedImage> &images, const std::vector<std::size_t> &which,
                                     const PeopleDetectorTraining &training, std::size_t *ignored = nullptr);
 }  // namespace agex

@@ -16,6 +16,7 @@
 #include <opencv2/core.hpp>
 
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -32,17 +33,37 @@ boost::program_options::options_description shapeTrainerOptions (ShapePredictorT
 /** Flags of the people detector trainer (defaults from training). */
 boost::program_options::options_description detectorTrainerOptions (PeopleDetectorTraining &training);
 
+/** Person crops (agex::PeopleCrops) an app reads: a folder, the person's box in each crop, and
+  * which fold of them it uses. */
+struct PeopleCropChoice
+{
+  std::string folder;  ///< empty: no crops
+  std::string box = "24,32,48,96";  ///< x,y,width,height: INRIA's 96x160 crops hold a 64x128 window at 16,16 whose middle 0.75 is the person
+  int folds = 5;
+  int fold = -1;  ///< training: this fold is left out; scoring: only this fold is used (-1: all)
+};
+/** --detector-crops, --detector-crops-box, --detector-crops-folds, --detector-crops-held-out
+  * (training), and the crop placement settings of training. */
+boost::program_options::options_description detectorCropOptions (PeopleCropChoice &choice, PeopleDetectorTraining &training);
+/** \brief Reads the crops (nullptr for no folder) and the indices the app uses: for training
+  * (test = false) all but choice.fold, for scoring (test = true) choice.fold or, for -1, all.
+  * \throws std::runtime_error naming the folder or the bad setting */
+std::shared_ptr<const PeopleCrops> loadPeopleCrops (const PeopleCropChoice &choice, bool test,
+                                                    std::vector<std::size_t> &which);
+
 /** bundledDataFile ("models/agex_people_detector.svm"), the 2D apps' default people detector. */
 std::string bundledPeopleDetectorFile ();
 
 /** Which people detector an app uses: the bundled one, a file, or OpenCV's (only when asked). */
 struct PeopleDetectorChoice
 {
-  std::string path;     ///< empty: the bundled detector
+  std::string path;     ///< empty: the bundled detector; kOpenCvHogName: OpenCV's
   bool opencv = false;  ///< OpenCV's pretrained HOG people detector
   double opencv_scale = 0.5;
   bool none = false;    ///< no detection (agex_landmarks_eval --no-detector)
 };
+/** The --detector value that selects OpenCV's pretrained HOG people detector. */
+constexpr const char *kOpenCvHogName = "opencv-hog";
 /** --detector, --opencv-detector, --opencv-scale. */
 boost::program_options::options_description detectorChoiceOptions (PeopleDetectorChoice &choice);
 /** \throws std::runtime_error for contradicting flags or a file that is no detector */
@@ -73,6 +94,7 @@ struct LandmarkEvaluationFlags
   LandmarkEvaluationSettings settings;
   ShapePredictorTrainingParams shape_params;
   PeopleDetectorTraining detector_training;
+  PeopleCropChoice crops;  ///< --crops: crops pasted into the tested images, scored under "crops"
 };
 /** Every flag of agex_landmarks_eval, bound to flags. */
 boost::program_options::options_description landmarkEvaluationOptions (LandmarkEvaluationFlags &flags);

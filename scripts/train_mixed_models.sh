@@ -17,7 +17,10 @@
 # agex_bonn_agex.yml and agex_bonn_sw.yml. Stages are checkpoints: a rerun with the same
 # WORK_DIR skips the datasets and forests already there. AGEX_TRAIN_SCALE (0.05-1, default 1)
 # renders that fraction of the synthetic frames and moves only the keyframes: a quick trial
-# (0.1: about 20 minutes on 2 cores). AGEX_TRAIN_HOLDOUT (Bonn sequences, e.g. 7,8) leaves
+# (0.1: about 20 minutes on 2 cores). At full scale on 2 cores: the datasets 14 minutes, the
+# forest 8, the four cross-fitting forests 16, then the fused classifier about an hour on one
+# core (276,000 patches), the AGEX-only and sliding-window models beside it longer (their end
+# was not yet measured: doc/results.md, "The mix, held out"). AGEX_TRAIN_HOLDOUT (Bonn sequences, e.g. 7,8) leaves
 # those sequences and their re-projected copies out of every model, for a held-out evaluation;
 # the rendered datasets are shared with other runs in the same WORK_DIR. Existing models in
 # OUT_DIR are kept unless AGEX_TRAIN_FORCE=1.

@@ -2,6 +2,8 @@
 #include <agex/landmarks/pasted_people.h>
 #include <agex/landmarks/people_detector.h>
 
+#include "placement.h"
+
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
@@ -23,21 +25,6 @@ checkParams (const PastedPeopleParams &p)
     throw std::invalid_argument ("pasted people: min_feet must lie in [0, 1], feather_px in [0, 20]");
   if (p.people_per_image < 1 || p.people_per_image > 10)
     throw std::invalid_argument ("pasted people: 1 to 10 people per image");
-}
-
-// How much a candidate box collides with the boxes already there: the largest share of either
-// box the other covers.
-double
-collision (const cv::Rect &box, const std::vector<cv::Rect> &taken)
-{
-  double worst = 0;
-  for (const cv::Rect &t : taken)
-  {
-    const double overlap = (box & t).area ();
-    if (overlap > 0)
-      worst = std::max (worst, overlap / std::min (box.area (), std::max (1, t.area ())));
-  }
-  return worst;
 }
 
 // Blends the person inside outline (in source's pixels) into canvas so that its outline's box
@@ -116,7 +103,7 @@ pastePeople (const std::vector<cv::Mat> &grey_images, const std::vector<std::vec
       const cv::Rect tight = cv::boundingRect (outline);
       // One height per image, each person within 15% of it: the trainer shrinks each image by its
       // tallest person, and a much smaller one would then be too small for the window.
-      const double spread = std::fmod (0.5 + 0.6180339887498949 * static_cast<double> (i), 1.0);
+      const double spread = detail::goldenSpread (i);
       const double vary = 1.0 + 0.3 * (std::fmod (0.5 + 0.7548776662466927 * static_cast<double> (p), 1.0) - 0.5);
       double height = canvas.rows * std::clamp ((params.min_height + (params.max_height - params.min_height) * spread) * vary,
                                                 params.min_height, params.max_height);
@@ -129,18 +116,12 @@ pastePeople (const std::vector<cv::Mat> &grey_images, const std::vector<std::vec
       std::uniform_int_distribution<int> x_of (0, canvas.cols - size.width);
       const int lowest_feet = std::max (size.height, static_cast<int> (std::lround (params.min_feet * canvas.rows)));
       std::uniform_int_distribution<int> feet_of (std::min (lowest_feet, canvas.rows), canvas.rows);
-      cv::Rect best;
-      double best_collision = 2.0;
-      for (int candidate = 0; candidate < 24 && best_collision > 0; ++candidate)
-      {
-        const cv::Rect box (x_of (rng), feet_of (rng) - size.height, size.width, size.height);
-        const double c = collision (box, taken);
-        if (c < best_collision)
-        {
-          best_collision = c;
-          best = box;
-        }
-      }
+      const cv::Rect best = detail::leastCollidingPlace (
+          [&] {
+            const cv::Rect box (x_of (rng), feet_of (rng) - size.height, size.width, size.height);
+            return std::make_pair (box, box);
+          },
+          taken);
       pasteOne (toGrey (grey_images[source]), outline, best, params.feather_px, canvas);
       boxes.push_back (best);
       taken.push_back (best);

@@ -3,6 +3,8 @@
 #include <agex/landmarks/contour_shape_predictor.h>
 #include <agex/landmarks/image_files.h>
 
+#include "placement.h"
+
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -12,39 +14,17 @@
 #include <filesystem>
 #include <random>
 #include <stdexcept>
+#include <utility>
 
 namespace agex
 {
 namespace
 {
-constexpr double kGolden = 0.6180339887498949;
-
-// Spread of item i over [0, 1), the same in every run.
-double
-spread (std::size_t i)
-{
-  return std::fmod (0.5 + kGolden * static_cast<double> (i), 1.0);
-}
-
 cv::Rect
 scaledRect (const cv::Rect &r, double k)
 {
   return cv::Rect (static_cast<int> (std::lround (r.x * k)), static_cast<int> (std::lround (r.y * k)),
                    static_cast<int> (std::lround (r.width * k)), static_cast<int> (std::lround (r.height * k)));
-}
-
-// The largest share of either box the other covers.
-double
-collision (const cv::Rect &box, const std::vector<cv::Rect> &taken)
-{
-  double worst = 0;
-  for (const cv::Rect &t : taken)
-  {
-    const double overlap = (box & t).area ();
-    if (overlap > 0)
-      worst = std::max (worst, overlap / std::min (box.area (), std::max (1, t.area ())));
-  }
-  return worst;
 }
 
 // Marks the columns (or rows) that lie within grow pixels of a set pixel of mask.
@@ -145,7 +125,7 @@ pasteCrops (const std::vector<AnnotatedImage> &backgrounds, const std::vector<st
     const cv::Mat grey = toGrey (source.grey);
     if (grey.empty ())
       continue;
-    const double wanted = p.min_background_height + (p.max_background_height - p.min_background_height) * spread (b);
+    const double wanted = p.min_background_height + (p.max_background_height - p.min_background_height) * detail::goldenSpread (b);
     const double k = std::min (1.0, wanted / grey.rows);
     cv::Mat canvas;
     cv::resize (grey, canvas, cv::Size (std::max (1, cvRound (grey.cols * k)), std::max (1, cvRound (grey.rows * k))), 0, 0,
@@ -161,7 +141,7 @@ pasteCrops (const std::vector<AnnotatedImage> &backgrounds, const std::vector<st
     {
       const std::size_t c = which[next++ % which.size ()];
       const double vary = 1.0 + 0.3 * (std::fmod (0.5 + 0.7548776662466927 * static_cast<double> (n), 1.0) - 0.5);
-      double height = std::clamp ((p.min_height + (p.max_height - p.min_height) * spread (b)) * vary,
+      double height = std::clamp ((p.min_height + (p.max_height - p.min_height) * detail::goldenSpread (b)) * vary,
                                   static_cast<double> (p.min_height), static_cast<double> (p.max_height));
       // The whole crop must fit into the canvas.
       height = std::min ({height, (canvas.rows - 1.0) * person.height / crop_size.height,
@@ -175,20 +155,15 @@ pasteCrops (const std::vector<AnnotatedImage> &backgrounds, const std::vector<st
       const int lowest_feet = std::max (person_bottom, static_cast<int> (std::lround (p.min_feet * canvas.rows)));
       const int highest_feet = canvas.rows - below;
       std::uniform_int_distribution<int> feet_of (std::min (lowest_feet, highest_feet), highest_feet);
-      cv::Rect best;
-      double best_collision = 2.0;
-      for (int candidate = 0; candidate < 24 && best_collision > 0; ++candidate)
-      {
-        const cv::Rect where (x_of (rng), feet_of (rng) - person_bottom, size.width, size.height);
-        const cv::Rect box (where.x + cvRound (person.x * s), where.y + cvRound (person.y * s), cvRound (person.width * s),
-                            cvRound (person.height * s));
-        const double hit = collision (box, taken);
-        if (hit < best_collision)
-        {
-          best_collision = hit;
-          best = where;
-        }
-      }
+      // The crop goes at where; the person inside it is what must not collide.
+      const cv::Rect best = detail::leastCollidingPlace (
+          [&] {
+            const cv::Rect where (x_of (rng), feet_of (rng) - person_bottom, size.width, size.height);
+            const cv::Rect box (where.x + cvRound (person.x * s), where.y + cvRound (person.y * s),
+                                cvRound (person.width * s), cvRound (person.height * s));
+            return std::make_pair (where, box);
+          },
+          taken);
       cv::Mat scaled_crop, scaled_alpha;
       const int interpolation = s < 1.0 ? cv::INTER_AREA : cv::INTER_LINEAR;
       cv::resize (crops.images[c], scaled_crop, size, 0, 0, interpolation);
@@ -283,7 +258,7 @@ peopleFreeImages (const std::vector<AnnotatedImage> &images, const std::vector<s
     const cv::Mat grey = toGrey (images.at (i).grey);
     for (const cv::Rect &region : peopleFreeRegions (images[i], params))
     {
-      const double wanted = params.min_region_height + (params.max_region_height - params.min_region_height) * spread (n++);
+      const double wanted = params.min_region_height + (params.max_region_height - params.min_region_height) * detail::goldenSpread (n++);
       const double k = std::min (1.0, wanted / region.height);
       cv::Mat cut;
       cv::resize (grey (region), cut, cv::Size (std::max (1, cvRound (region.width * k)), std::max (1, cvRound (region.height * k))),

@@ -22,7 +22,9 @@ struct PeopleCrops
 {
   std::vector<cv::Mat> images;  ///< CV_8UC1, all the same size
   std::vector<std::string> names;
-  cv::Rect person;  ///< the person's box in each crop (INRIA's 96x160 crops: 24,32 48x96, the middle 0.75 of the 64x128 window at 16,16)
+  /** The person's box in each crop (INRIA's 96x160 crops: 24,32 48x96, the middle 0.75 of
+    * the 64x128 window at 16,16). */
+  cv::Rect person;
 };
 
 /** \brief Reads every .png / .jpg / .jpeg in folder (sorted by name) as grey images.

@@ -27,7 +27,15 @@ PCL_FORESTS="$ROOT/../shared/data/pcl_people"
 RECIPE_NAME=${AGEX_EVAL_RECIPE:-bonn}
 [[ $RECIPE_NAME = bonn || $RECIPE_NAME = mixed ]] ||
   { echo "evaluate_bonn: AGEX_EVAL_RECIPE must be bonn or mixed, not '$RECIPE_NAME'" >&2; exit 1; }
+# A fold folder holds one recipe's models: resuming it with the other would mix or overwrite
+# them (folders of before this record hold the Bonn recipe).
+if [ -d "$OUT" ] && [ -n "$(ls -A "$OUT")" ]; then
+  made_with=$(cat "$OUT/.recipe" 2> /dev/null || echo bonn)
+  [ "$made_with" = "$RECIPE_NAME" ] ||
+    { echo "evaluate_bonn: $OUT holds the $made_with recipe's fold, not $RECIPE_NAME's: use another folder" >&2; exit 1; }
+fi
 mkdir -p "$OUT"
+echo "$RECIPE_NAME" > "$OUT/.recipe"
 DATA="$OUT/../bonn-datasets"
 for view in portrait full; do
   [ -f "$DATA/bonn-$view/dataset.json" ] || "$BIN/agex_convert" bonn --input "$BONN" --output "$DATA/bonn-$view" --view "$view"

@@ -2,7 +2,8 @@
 # scripts/train_mixed_models.sh and evaluate_moved.sh write only what is theirs.
 # train_mixed_models.sh never writes over models already in its output folder (unless
 # AGEX_TRAIN_FORCE=1) and refuses a bad AGEX_TRAIN_SCALE or AGEX_TRAIN_HOLDOUT, before any work;
-# evaluate_bonn.sh refuses an unknown AGEX_EVAL_RECIPE before making its folder. Skips (77) without
+# evaluate_bonn.sh refuses an unknown AGEX_EVAL_RECIPE before making its folder, and a fold
+# folder of the other recipe. Skips (77) without
 # ../shared's data (the script checks it first).
 # Usage: run_train_mixed_guard.sh SOURCE_DIR WORK_DIR
 set -u
@@ -31,6 +32,11 @@ AGEX_EVAL_RECIPE=forest bash "$src/scripts/evaluate_bonn.sh" "$work/fold" 7,8 "$
   && fail "evaluate_bonn took an unknown recipe"
 grep -q "AGEX_EVAL_RECIPE" "$work/err5" || fail "the recipe refusal does not name it: $(cat "$work/err5")"
 [ -e "$work/fold" ] && fail "evaluate_bonn made its folder before refusing the recipe"
+mkdir -p "$work/bonnfold" && echo "a Bonn-recipe forest" > "$work/bonnfold/forest.agexforest"
+AGEX_EVAL_RECIPE=mixed bash "$src/scripts/evaluate_bonn.sh" "$work/bonnfold" 7,8 "$work/no_build" 2> "$work/err6" \
+  && fail "evaluate_bonn resumed a Bonn-recipe fold with the mixed recipe"
+[ "$(cat "$work/bonnfold/forest.agexforest")" = "a Bonn-recipe forest" ] || fail "the Bonn-recipe fold's forest changed"
+grep -q "holds the bonn recipe" "$work/err6" || fail "the mixed-recipe refusal does not say why: $(cat "$work/err6")"
 # scripts/evaluate_moved.sh writes only into a folder of its own.
 mkdir -p "$work/mine" && echo "a result of mine" > "$work/mine/agex_bonn_kinect_3m.json"
 cp "$work/mine/agex_bonn_kinect_3m.json" "$work/mine.orig"

@@ -23,7 +23,10 @@
 # was not yet measured: doc/results.md, "The mix, held out"). AGEX_TRAIN_HOLDOUT (Bonn sequences, e.g. 7,8) leaves
 # those sequences and their re-projected copies out of every model, for a held-out evaluation;
 # the rendered datasets are shared with other runs in the same WORK_DIR. Existing models in
-# OUT_DIR are kept unless AGEX_TRAIN_FORCE=1.
+# OUT_DIR are kept unless AGEX_TRAIN_FORCE=1. AGEX_TRAIN_BACKGROUND_RATIO (default 4, 0 keeps
+# all) thins the background examples of the fused and AGEX-only detectors to that many per
+# positive (agex_train --background-ratio); AGEX_TRAIN_DETECTORS (default "fused agex sw")
+# picks the detectors trained.
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 MODELS=${1:?usage: train_mixed_models.sh OUT_DIR [BUILD_DIR] [WORK_DIR]}
@@ -39,6 +42,16 @@ HOLDOUT="${AGEX_TRAIN_HOLDOUT:-}"
   { echo "train_mixed_models: AGEX_TRAIN_HOLDOUT must list Bonn sequences 1-8 (e.g. 7,8), not '$HOLDOUT'" >&2; exit 1; }
 # Forests trained without the held-out sequences get their own names in WORK_DIR.
 TAG=${HOLDOUT:+_without_${HOLDOUT//,/}}
+RATIO="${AGEX_TRAIN_BACKGROUND_RATIO:-4}"
+python3 -c "import sys; r = float(sys.argv[1]); sys.exit(0 if 0 <= r <= 1000 else 1)" "$RATIO" 2> /dev/null ||
+  { echo "train_mixed_models: AGEX_TRAIN_BACKGROUND_RATIO must be 0-1000, not '$RATIO'" >&2; exit 1; }
+DETECTORS="${AGEX_TRAIN_DETECTORS:-fused agex sw}"
+for d in $DETECTORS; do
+  case "$d" in fused|agex|sw) ;; *)
+    echo "train_mixed_models: AGEX_TRAIN_DETECTORS lists fused, agex and sw, not '$d'" >&2; exit 1 ;;
+  esac
+done
+[ -n "${DETECTORS// /}" ] || { echo "train_mixed_models: AGEX_TRAIN_DETECTORS is empty" >&2; exit 1; }
 frames () { python3 -c "import sys; print(max(20, round($1 * float(sys.argv[1]))))" "$SCALE"; }
 for need in "$SHARED/bonn" "$SHARED/mocap/cmu_cc" "$SHARED/mocap/cmu_poses" "$SHARED/makehuman/targets"; do
   [ -d "$need" ] || { echo "train_mixed_models: $need is missing (see ../shared/README.md)" >&2; exit 1; }
@@ -131,18 +144,22 @@ done
 # itself, so the forest goes there first).
 cp "$WORK/forest$TAG.agexforest" "$MODELS/agex_bonn_forest.agexforest"
 RECIPE=(--k 16 --weak-count 200 --fragments 100 --random-negatives 3)
-# agex_train uses one core: the three detectors train side by side.
-stamp "fused, AGEX-only and sliding-window detectors"
-"$BIN/agex_train" --fused --forest "$MODELS/agex_bonn_forest.agexforest" "${fold_args[@]}" "${RECIPE[@]}" \
-  --out "$MODELS/agex_bonn.yml" > "$WORK/fused$TAG.log" 2>&1 &
-fused=$!
-"$BIN/agex_train" $(all_args) "${RECIPE[@]}" --out "$MODELS/agex_bonn_agex.yml" > "$WORK/agex$TAG.log" 2>&1 &
-agex_only=$!
-"$BIN/agex_train" --sliding-window $(all_args) --weak-count 300 --fragments 150 --out "$MODELS/agex_bonn_sw.yml" \
-  > "$WORK/sw$TAG.log" 2>&1 &
-sliding=$!
+# agex_train uses one core: the detectors train side by side.
+stamp "detectors: $DETECTORS"
+jobs_started=()
+for d in $DETECTORS; do
+  case "$d" in
+  fused) "$BIN/agex_train" --fused --forest "$MODELS/agex_bonn_forest.agexforest" "${fold_args[@]}" "${RECIPE[@]}" \
+           --background-ratio "$RATIO" --out "$MODELS/agex_bonn.yml" > "$WORK/fused$TAG.log" 2>&1 & ;;
+  agex) "$BIN/agex_train" $(all_args) "${RECIPE[@]}" --background-ratio "$RATIO" --out "$MODELS/agex_bonn_agex.yml" \
+          > "$WORK/agex$TAG.log" 2>&1 & ;;
+  sw) "$BIN/agex_train" --sliding-window $(all_args) --weak-count 300 --fragments 150 --out "$MODELS/agex_bonn_sw.yml" \
+        > "$WORK/sw$TAG.log" 2>&1 & ;;
+  esac
+  jobs_started+=("$!:$d$TAG")
+done
 failed=0
-for job in "$fused:fused$TAG" "$agex_only:agex$TAG" "$sliding:sw$TAG"; do
+for job in "${jobs_started[@]}"; do
   wait "${job%%:*}" || { echo "train_mixed_models: ${job#*:} failed (log: $WORK/${job#*:}.log)" >&2; failed=1; }
 done
 [ "$failed" = 0 ]

@@ -2,7 +2,9 @@
 
 #include <agex/features/depth_patch_estimation.h>
 
+#include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 namespace agex
 {
@@ -188,5 +190,46 @@ collectFusedTrainingSamples (const DepthPipelineResult &prepared, const pcl::Poi
     auxiliary.push_back (aux);
     classes.push_back (tip < 0 ? -1 : static_cast<int> (truth[tip].part));
   }
+}
+std::size_t
+keepBackgroundAtMost (float max_ratio, std::mt19937_64 &rng, std::vector<agex::DepthPatch> &patches,
+                      std::vector<std::vector<float>> &auxiliary, std::vector<int> &classes)
+{
+  if (patches.size () != classes.size () || (!auxiliary.empty () && auxiliary.size () != classes.size ()))
+    throw std::invalid_argument ("keepBackgroundAtMost: patches, auxiliary features and classes differ in count");
+  if (!(max_ratio >= 0.f) || !std::isfinite (max_ratio))
+    throw std::invalid_argument ("keepBackgroundAtMost: the ratio must be finite and not negative");
+  std::vector<std::size_t> background;
+  for (std::size_t i = 0; i < classes.size (); ++i)
+    if (classes[i] < 0)
+      background.push_back (i);
+  const std::size_t positives = classes.size () - background.size ();
+  const double allowed = static_cast<double> (max_ratio) * static_cast<double> (positives);
+  if (max_ratio == 0.f || static_cast<double> (background.size ()) <= allowed)
+    return 0;
+  const auto kept_count = static_cast<std::size_t> (allowed);
+  std::shuffle (background.begin (), background.end (), rng);
+  std::vector<char> keep (classes.size (), 1);
+  for (std::size_t i = kept_count; i < background.size (); ++i)
+    keep[background[i]] = 0;
+  std::size_t out = 0;
+  for (std::size_t i = 0; i < classes.size (); ++i)
+  {
+    if (!keep[i])
+      continue;
+    if (out != i)
+    {
+      patches[out] = patches[i];
+      classes[out] = classes[i];
+      if (!auxiliary.empty ())
+        auxiliary[out] = std::move (auxiliary[i]);
+    }
+    ++out;
+  }
+  patches.resize (out);
+  classes.resize (out);
+  if (!auxiliary.empty ())
+    auxiliary.resize (out);
+  return background.size () - kept_count;
 }
 }  // namespace agex

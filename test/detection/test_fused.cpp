@@ -274,3 +274,69 @@ TEST (FusedDetector, AModelTrainedAtOneResolutionScoresAtAnother)
   }
 }
 }  // namespace
+
+TEST (TrainingExamples, BackgroundThinnedToTheRatioKeepingEveryPositiveInOrder)
+{
+  // 6 positives and 40 background examples, each patch marked by its index.
+  std::vector<agex::DepthPatch> patches (46);
+  std::vector<std::vector<float>> auxiliary (46);
+  std::vector<int> classes (46, -1);
+  for (int i = 0; i < 46; ++i)
+  {
+    patches[i].patch[0] = static_cast<float> (i);
+    auxiliary[i] = {static_cast<float> (i)};
+    if (i % 7 == 0 && i < 42)
+      classes[i] = i % 3;
+  }
+  std::mt19937_64 rng (3);
+  auto p = patches;
+  auto a = auxiliary;
+  auto c = classes;
+  EXPECT_EQ (agex::keepBackgroundAtMost (2.f, rng, p, a, c), 28u);
+  ASSERT_EQ (p.size (), 18u);
+  ASSERT_EQ (a.size (), 18u);
+  ASSERT_EQ (c.size (), 18u);
+  int positives = 0;
+  for (std::size_t i = 0; i < p.size (); ++i)
+  {
+    const int original = static_cast<int> (p[i].patch[0]);
+    EXPECT_EQ (a[i][0], p[i].patch[0]) << "a patch and its features stay together";
+    EXPECT_EQ (c[i], classes[original]);
+    if (i > 0)
+    {
+      EXPECT_GT (original, static_cast<int> (p[i - 1].patch[0])) << "the order is kept";
+    }
+    positives += c[i] >= 0;
+  }
+  EXPECT_EQ (positives, 6);
+
+  // Another seed keeps another choice of background.
+  std::mt19937_64 other_rng (4);
+  auto p2 = patches;
+  auto a2 = auxiliary;
+  auto c2 = classes;
+  agex::keepBackgroundAtMost (2.f, other_rng, p2, a2, c2);
+  bool differs = false;
+  for (std::size_t i = 0; i < p.size (); ++i)
+    differs = differs || p[i].patch[0] != p2[i].patch[0];
+  EXPECT_TRUE (differs);
+
+  // Ratio 0, or one above what there is, keeps everything; no auxiliary features is fine.
+  std::vector<std::vector<float>> none;
+  p = patches;
+  c = classes;
+  EXPECT_EQ (agex::keepBackgroundAtMost (0.f, rng, p, none, c), 0u);
+  EXPECT_EQ (agex::keepBackgroundAtMost (7.f, rng, p, none, c), 0u);
+  EXPECT_EQ (p.size (), 46u);
+  EXPECT_EQ (agex::keepBackgroundAtMost (0.5f, rng, p, none, c), 37u);
+  EXPECT_EQ (p.size (), 9u);
+
+  // Mismatched counts and a bad ratio are refused, nothing changed.
+  c.pop_back ();
+  EXPECT_THROW (agex::keepBackgroundAtMost (1.f, rng, p, none, c), std::invalid_argument);
+  c = classes;
+  p = patches;
+  EXPECT_THROW (agex::keepBackgroundAtMost (std::nanf (""), rng, p, none, c), std::invalid_argument);
+  EXPECT_THROW (agex::keepBackgroundAtMost (-1.f, rng, p, none, c), std::invalid_argument);
+  EXPECT_EQ (p.size (), 46u);
+}

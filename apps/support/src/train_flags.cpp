@@ -51,9 +51,11 @@ checkRanges (const TrainFlags &flags)
       choice.window_negatives < 0 || choice.window_negatives > 10000 || choice.jitter < 0 || choice.jitter > 1000 ||
       !(choice.jitter_radius >= 0.f && choice.jitter_radius <= 1.f) || classifier.weak_count < 1 ||
       classifier.weak_count > 100000 || classifier.dictionary.fragments_per_class < 1 ||
-      classifier.dictionary.fragments_per_class > 100000)
+      classifier.dictionary.fragments_per_class > 100000 || !(choice.background_ratio >= 0.f) ||
+      choice.background_ratio > 1000.f)
     throw std::runtime_error ("--radius must lie in (0, 1], --random-negatives and --window-negatives in [0, 10000], "
-                              "--jitter in [0, 1000], --jitter-radius in [0, 1], --weak-count and --fragments in [1, 100000]");
+                              "--jitter in [0, 1000], --jitter-radius in [0, 1], --weak-count and --fragments in [1, 100000], "
+                              "--background-ratio in [0, 1000]");
   const PatchGeometry &patch = flags.patch;
   if (patch.size < 3 || patch.size > 41 || !(patch.extent > 0.f && patch.extent <= 5.f) ||
       !(patch.clamp > 0.f && patch.clamp <= 5.f))
@@ -81,6 +83,8 @@ parseTrainFlags (int argc, char **argv, TrainFlags &flags)
     ("radius", po::value (&choice.radius)->default_value (choice.radius, "0.1"), "metres from a labelled tip for a positive")
     ("random-negatives", po::value (&choice.random_negatives)->default_value (choice.random_negatives),
      "random surface points per frame added as negatives (AGEX models)")
+    ("background-ratio", po::value (&choice.background_ratio)->default_value (choice.background_ratio, "0"),
+     "keep at most this many background examples per positive, chosen at random (0: all)")
     ("weak-count", po::value (&classifier_params.weak_count)->default_value (classifier_params.weak_count),
      "boosting rounds (decision stumps) per class")
     ("fragments", po::value (&classifier_params.dictionary.fragments_per_class)

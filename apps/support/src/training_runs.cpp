@@ -60,6 +60,10 @@ collectTrainingExamples (const std::vector<std::string> &datasets, const Trainin
     }
     sources.push_back ({{"dataset", spec}, {"frames", used}});
   }
+  const std::size_t dropped = keepBackgroundAtMost (choice.background_ratio, rng, patches, auxiliary, classes);
+  if (dropped > 0)
+    std::cout << "background thinned to " << choice.background_ratio << " per positive: " << dropped
+              << " examples dropped\n";
   return sources;
 }
 

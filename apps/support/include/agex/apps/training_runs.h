@@ -26,6 +26,9 @@ struct TrainingChoice
   int jitter = 3;                ///< sliding windows: extra positives per tip
   float jitter_radius = 0.04f;   ///< sliding windows: metres from the tip for those
   bool keyframes = false;
+  /** At most this many background examples per positive, a random choice of them
+    * (agex::keepBackgroundAtMost); 0 keeps all. */
+  float background_ratio = 0.f;
   std::uint64_t seed = 1;
   BodyPartForest::ConstPtr forest;  ///< fused: the forest whose features the classifier learns
   /** Fused: the forest that labels the frames of a dataset argument (DIR[@SEQ,...], as given)
@@ -35,7 +38,8 @@ struct TrainingChoice
 };
 
 /** The examples of every labelled frame of the datasets (DIR[@SEQ,...]), with a progress line
-  * per dataset. \return per dataset the frames used */
+  * per dataset, the background thinned to choice.background_ratio.
+  * \return per dataset the frames used */
 nlohmann::json collectTrainingExamples (const std::vector<std::string> &datasets, const TrainingChoice &choice,
                                         const DetectorSettings &settings, const PatchGeometry &geometry,
                                         std::vector<DepthPatch> &patches, std::vector<std::vector<float>> &auxiliary,

@@ -6,12 +6,15 @@
 #include "test_support.h"
 
 #include <agex/detection/depth_pipeline.h>
+#include <agex/filters/floor_removal.h>
 #include <agex/io/bonn.h>
 #include <agex/io/frame_io.h>
 
 #include <pcl/console/print.h>
 
 #include <atomic>
+#include <cmath>
+#include <limits>
 #include <sstream>
 #include <thread>
 
@@ -456,6 +459,62 @@ TEST (PipelineFloor, DeskTopLargerThanTheFloorIsNotTakenForIt)
   EXPECT_EQ (count (DeskSceneObject::Floor, *result.filtered), 0u);
   // The legs stay (the spur erosion takes a few pixels off their edges).
   EXPECT_GT (count (DeskSceneObject::Person, *result.filtered, 0.55f), legs / 2);
+}
+
+/** A plane seen by a 160x120 camera (f 140): the points p with n.p = offset in the camera's
+  * axes, within 8 m; NaN where a ray misses it. */
+Cloud::Ptr
+planeView (const Eigen::Vector3f &n, float offset)
+{
+  Cloud::Ptr cloud (new Cloud (160, 120));
+  for (int v = 0; v < 120; ++v)
+    for (int u = 0; u < 160; ++u)
+    {
+      const Eigen::Vector3f ray ((u - 79.5f) / 140.f, (v - 59.5f) / 140.f, 1.f);
+      const float t = offset / n.dot (ray);
+      const float nan = std::numeric_limits<float>::quiet_NaN ();
+      (*cloud) (u, v) = t > 0.f && t * ray.norm () < 8.f ? pcl::PointXYZ (t * ray.x (), t * ray.y (), t * ray.z ())
+                                                         : pcl::PointXYZ (nan, nan, nan);
+    }
+  return cloud;
+}
+
+TEST (PipelineFloor, FloorOfACameraPitchedDownIsFoundAndAPlaneOverTheCameraIsNot)
+{
+  QuietPcl quiet;
+  // A camera 1.5 m above the floor looking 35 degrees down: up in its axes is
+  // (0, -cos 35, -sin 35), and the floor lies 1.5 m along -up.
+  const float pitch = 35.f * static_cast<float> (M_PI) / 180.f;
+  const Eigen::Vector3f up (0.f, -std::cos (pitch), -std::sin (pitch));
+  const Cloud::Ptr floor_view = planeView (up, -1.5f);
+  agex::FloorRemoval<pcl::PointXYZ> floor;  // the defaults: level camera's up, tilt <= 45
+  floor.setInputCloud (floor_view);
+  pcl::Indices above;
+  floor.filter (above);
+  ASSERT_TRUE (floor.getFloorFound ());
+  EXPECT_GT (floor.getFloorPlane ().head<3> ().dot (up), 0.999f);
+  EXPECT_NEAR (floor.getFloorPlane ()[3], 1.5f, 0.02f) << "the camera's height above it";
+  EXPECT_TRUE (above.empty ());
+  // The same filter limited to 25 degrees, as before, cannot take it for the floor.
+  floor.setMaxTilt (25.f);
+  floor.filter (above);
+  EXPECT_FALSE (floor.getFloorFound ());
+
+  // A plane 40 degrees from level rising away from a level camera, 0.5 m over it (a slice
+  // through a torso bent over the camera, a sloping ceiling): within the tilt limit, the only
+  // surface in view, and no floor, since the camera is under it.
+  const float slope = 40.f * static_cast<float> (M_PI) / 180.f;
+  const Eigen::Vector3f n (0.f, -std::cos (slope), std::sin (slope));
+  const Cloud::Ptr over = planeView (n, 0.5f);
+  std::size_t finite = 0;
+  for (const auto &p : *over)
+    finite += std::isfinite (p.z);
+  ASSERT_GT (finite, 5000u);
+  agex::FloorRemoval<pcl::PointXYZ> ceiling;
+  ceiling.setInputCloud (over);
+  ceiling.filter (above);
+  EXPECT_FALSE (ceiling.getFloorFound ());
+  EXPECT_EQ (above.size (), finite) << "nothing removed";
 }
 
 // ---------------------------------------------------------------------------

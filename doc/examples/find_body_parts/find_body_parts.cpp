@@ -132,7 +132,7 @@ main (int argc, char **argv)
     agex::FloorRemoval<pcl::PointXYZ> floor;
     floor.setInputCloud (smoothed);
     floor.setUpAxis (Eigen::Vector3f (0.f, -1.f, 0.f));  // camera y points down
-    floor.setMaxTilt (25.f);                            // degrees
+    floor.setMaxTilt (45.f);                            // degrees
     floor.setDistanceThreshold (0.04f);                 // metres
     floor.setKeepOrganized (true);
     floor.filter (*standing);

@@ -61,7 +61,7 @@ struct DepthPipelineParams
   // Floor (agex::FloorRemoval).
   bool remove_floor = true;
   Eigen::Vector3f up = Eigen::Vector3f (0.f, -1.f, 0.f);
-  float floor_max_tilt_deg = 25.f;
+  float floor_max_tilt_deg = 45.f;
   float floor_distance = 0.04f;
   int floor_min_inliers = 200;
   // Spurs and ragged edges (agex::SpurFilter).

@@ -15,8 +15,11 @@ namespace agex
   * a tilted plane through a patch of wall) is not the floor, and removing everything
   * below it would take the legs. Such a plane is rejected when more than a quarter of its
   * inlier count lies clearly under it (by 0.10 m, or three distance thresholds if more),
-  * and RANSAC tries again among the points under it, where the floor must be and where it
-  * is no longer outnumbered; at most max attempts planes are tried.
+  * or when the viewpoint (the cloud's sensor origin) is not above it by more than the
+  * distance threshold (a camera sees a floor from above; a steep plane through a torso or a
+  * wall may pass over it), and RANSAC tries again among the points under it, where the
+  * floor must be and where it is no longer outnumbered; at most max attempts planes are
+  * tried.
   *
   * Output: the finite indices at least the distance threshold above the floor (all finite
   * indices when no floor was found). setNegative gives the floor points instead;
@@ -50,7 +53,8 @@ public:
   void setUpAxis (const Eigen::Vector3f &up) { up_ = up; }
   const Eigen::Vector3f &getUpAxis () const { return up_; }
 
-  /** Largest angle in degrees between the floor's normal and up (default 25). */
+  /** Largest angle in degrees between the floor's normal and up (default 45: cameras looking
+    * down at people are often pitched 30-40 degrees). */
   void setMaxTilt (float degrees) { max_tilt_deg_ = degrees; }
   float getMaxTilt () const { return max_tilt_deg_; }
 
@@ -90,7 +94,7 @@ private:
   bool findFloor (pcl::IndicesPtr sample);
 
   Eigen::Vector3f up_ = Eigen::Vector3f (0.f, -1.f, 0.f);
-  float max_tilt_deg_ = 25.f;
+  float max_tilt_deg_ = 45.f;
   float distance_ = 0.04f;
   int min_inliers_ = 200;
   int sample_stride_ = 4;

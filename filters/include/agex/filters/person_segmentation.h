@@ -184,7 +184,8 @@ public:
     * looks for planes facing it and the floor-free rule measures heights along it. */
   void setUpAxis (const Eigen::Vector3f &up) { up_ = up; }
   const Eigen::Vector3f &getUpAxis () const { return up_; }
-  /** Largest floor tilt from the up axis, degrees (default 25). */
+  /** Largest floor tilt from the up axis, degrees (default 45: a camera looking down at people
+    * from a robot or a shelf is often pitched 30-40 degrees). */
   void setFloorMaxTilt (float degrees) { floor_max_tilt_deg_ = degrees; }
   float getFloorMaxTilt () const { return floor_max_tilt_deg_; }
   /** Floor inlier distance for the search, and the least floor margin: points lower than
@@ -414,7 +415,7 @@ private:
   bool floor_found_ = false;
   Eigen::Vector4f floor_plane_ = Eigen::Vector4f::Zero ();
   Eigen::Vector3f up_ = Eigen::Vector3f (0.f, -1.f, 0.f);
-  float floor_max_tilt_deg_ = 25.f;
+  float floor_max_tilt_deg_ = 45.f;
   float floor_distance_ = 0.04f;
   float min_floor_spread_ = 0.15f;
   float fx_ = 0.f, fy_ = 0.f, used_fx_ = 0.f, used_fy_ = 0.f;

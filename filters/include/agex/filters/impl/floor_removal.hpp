@@ -133,7 +133,10 @@ agex::FloorRemoval<PointT>::findFloor (pcl::IndicesPtr sample)
     std::size_t below = 0;
     for (const auto i : *sample)
       below += plane.head<3> ().dot (cloud[i].getVector3fMap ()) + plane[3] < below_limit;
-    if (below * 4 > inliers.size ())
+    // The camera sees the floor from above: a plane with the viewpoint on or under it (a
+    // steep slice through a torso or a wall) is no floor either.
+    const float viewpoint_height = plane.head<3> ().dot (cloud.sensor_origin_.template head<3> ()) + plane[3];
+    if (below * 4 > inliers.size () || !(viewpoint_height > distance_))
     {
       // Not the floor, which must lie under it: look again among the points below.
       pcl::IndicesPtr under (new pcl::Indices);

@@ -652,6 +652,38 @@ TEST (PersonSegmentation, PersonCutByTheLeftBorderKeepsItsVisibleParts)
   EXPECT_GT (right_leg, 1500);
 }
 
+TEST (PersonSegmentation, HeadAndShouldersCutByTheLowerBorderAreAPerson)
+{
+  // A camera 1.75 m high, 0.9 m from someone, no floor in view (background removed): the
+  // image's lower border crosses the chest at about 1.34 m, so the head, the neck and the
+  // tops of the shoulders show, less than a whole person's least area; a box of about that
+  // size cut by the border is still no one (as wide on top as below).
+  Scene scene;
+  scene.floor = false;
+  scene.camera_height = 1.75;
+  scene.addPerson (0.0, 0.9);
+  const DepthCamera cam;
+  const Cloud::Ptr cloud = scene.render (cam);
+  double area = 0.0;
+  for (const auto &p : *cloud)
+    if (std::isfinite (p.z))
+      area += (p.z / cam.f) * (p.z / cam.f);  // the pixel's footprint facing the camera
+  Segmentation seg;
+  ASSERT_GT (area, seg.getHiddenPersonMinArea ());
+  ASSERT_LT (area, seg.getMinArea ()) << "the fixture must show less than a whole person's least area";
+  const Found found = segment (cloud, &seg);
+  ASSERT_EQ (found.persons.size (), 1u);
+  EXPECT_TRUE (found.infos[0].border & agex::PersonInfo::kBottom);
+  EXPECT_FALSE (seg.getFloorFound ());
+
+  Scene box_scene;
+  box_scene.floor = false;
+  box_scene.camera_height = 1.75;
+  box_scene.addBox (-0.15, 0.15, 1.0, 1.6, 0.9, 1.1);
+  const Found box = segment (box_scene.render (cam));
+  EXPECT_TRUE (box.persons.empty ());
+}
+
 TEST (PersonSegmentation, FloorSeenOnlyFarAwayIsFound)
 {
   // A person at 5 m in front of a wall at 6 m, the floor in view only from 4.5 m on (as in a

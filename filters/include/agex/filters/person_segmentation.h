@@ -87,7 +87,7 @@ enum class PersonVerdict;
   *    lowest point at most the maximum bottom height, and the lowest cells standing on
   *    something (the floor, a gap in the data, the image border, or something nearer that
   *    hides the rest: not on a surface behind them, like a thing on a wall); the visible
-  *    area at least the minimum; the upright parts at most the maximum width; at least the
+  *    area at least the minimum (cut by the image's border: the hidden person's minimum); the upright parts at most the maximum width; at least the
   *    minimum background fraction of the outline (away from the image border) bordering
   *    on background (no data, the floor, or surfaces farther away: a fragment hemmed in by
   *    nearer things is no one of its own); a top narrower than the body (setCrownLimits),
@@ -269,7 +269,9 @@ public:
     * wall or a desk seen from its end does. */
   void setMaxWidth (float metres) { max_width_ = metres; }
   float getMaxWidth () const { return max_width_; }
-  /** Least visible area, square metres (default 0.12: a head and shoulders). */
+  /** Least visible area, square metres (default 0.12: a head and shoulders with the chest). A
+    * cluster cut by the image's border needs only the hidden person's least area
+    * (setHiddenPersons, 0.06): a close body cut at the chest shows little more than its head. */
   void setMinArea (float square_metres) { min_area_ = square_metres; }
   float getMinArea () const { return min_area_; }
   /** The narrow-top rule: the crown, the cells within drop metres (plus twice the height

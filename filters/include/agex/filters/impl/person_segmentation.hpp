@@ -905,7 +905,9 @@ agex::PersonSegmentation<PointT>::verdict (const detail::PersonScan &scan, const
   using detail::PersonVerdict;
   if (!s.cells)
     return PersonVerdict::kEmpty;
-  if (s.area < min_area_)
+  // A body cut off by the image's border shows less of itself: a head and shoulders at its
+  // lower border, half a body at a side.
+  if (s.area < (s.border ? hidden_min_area_ : min_area_))
     return PersonVerdict::kTooSmall;
   if (s.width > max_width_)
     return PersonVerdict::kTooWide;

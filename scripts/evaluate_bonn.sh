@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The table of doc/results.md, "The fused detector against every baseline", for one fold:
-# trains the four depth models of scripts/train_bundled_models.sh (same recipe) on the Bonn
-# sequences that are not TEST, then scores on TEST's keyframes, portrait and full view:
+# trains the four depth models of scripts/train_bundled_models.sh (AGEX_BUNDLED_RECIPE=bonn's
+# recipe; AGEX_EVAL_RECIPE=mixed below for today's) on the Bonn sequences that are not TEST, then scores on TEST's keyframes, portrait and full view:
 # AGEX only, the sliding-window baseline, PCL's forest alone, our forest alone, fused, and the
 # fused model with agex 0.1's crop box in place of person isolation (box: what isolation costs
 # on Bonn, whose people all stand in that box).
@@ -11,7 +11,8 @@
 # go to OUT/../bonn-datasets, shared by the folds beside OUT.
 # AGEX_EVAL_RECIPE=mixed trains the fold's models with scripts/train_mixed_models.sh instead
 # (synthetic people and re-projected frames, TEST's sequences and their moved copies left out;
-# its rendered datasets go to OUT/../mixed-work, shared by the folds): about 70 minutes a fold.
+# its rendered datasets go to OUT/../mixed-work, shared by the folds): about 50 minutes a fold
+# for the fused detector once the datasets are rendered (more with the baselines).
 #   scripts/evaluate_bonn.sh OUT TEST [BUILD_DIR]      e.g. OUT=/tmp/split TEST=7,8
 # Leave-one-sequence-out: for s in 1 2 3 4 5 6 7 8; do scripts/evaluate_bonn.sh /tmp/loso/$s $s; done
 #                         scripts/bonn_table.py /tmp/loso/[0-9]*

@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # scripts/train_mixed_models.sh and evaluate_moved.sh write only what is theirs.
 # train_mixed_models.sh never writes over models already in its output folder (unless
-# AGEX_TRAIN_FORCE=1) and refuses a bad AGEX_TRAIN_SCALE or AGEX_TRAIN_HOLDOUT, before any work;
+# AGEX_TRAIN_FORCE=1) and refuses a bad AGEX_TRAIN_SCALE, AGEX_TRAIN_HOLDOUT,
+# AGEX_TRAIN_BACKGROUND_RATIO or AGEX_TRAIN_DETECTORS before any work, as train_bundled_models.sh
+# an unknown AGEX_BUNDLED_RECIPE;
 # evaluate_bonn.sh refuses an unknown AGEX_EVAL_RECIPE before making its folder, and a fold
 # folder of the other recipe. Skips (77) without
 # ../shared's data (the script checks it first).
@@ -28,6 +30,17 @@ AGEX_TRAIN_HOLDOUT=9 bash "$src/scripts/train_mixed_models.sh" "$work/new" "$wor
   && fail "AGEX_TRAIN_HOLDOUT=9 (no such Bonn sequence) was accepted"
 grep -q "AGEX_TRAIN_HOLDOUT" "$work/err4" || fail "the hold-out refusal does not name it: $(cat "$work/err4")"
 [ -e "$work/w3" ] && fail "it started work before refusing the hold-out"
+AGEX_TRAIN_BACKGROUND_RATIO=-1 bash "$src/scripts/train_mixed_models.sh" "$work/new" "$work/no_build" "$work/w6" \
+  2> "$work/err7" && fail "AGEX_TRAIN_BACKGROUND_RATIO=-1 was accepted"
+grep -q "AGEX_TRAIN_BACKGROUND_RATIO" "$work/err7" || fail "the ratio refusal does not name it: $(cat "$work/err7")"
+AGEX_TRAIN_DETECTORS="fused forest" bash "$src/scripts/train_mixed_models.sh" "$work/new" "$work/no_build" "$work/w7" \
+  2> "$work/err8" && fail "AGEX_TRAIN_DETECTORS with an unknown detector was accepted"
+grep -q "AGEX_TRAIN_DETECTORS" "$work/err8" || fail "the detector refusal does not name it: $(cat "$work/err8")"
+[ -e "$work/w6" ] || [ -e "$work/w7" ] && fail "it started work before refusing the ratio or the detectors"
+AGEX_BUNDLED_RECIPE=forest bash "$src/scripts/train_bundled_models.sh" "$work/no_build" "$work/w8" 2> "$work/err9" \
+  && fail "train_bundled_models took an unknown recipe"
+grep -q "AGEX_BUNDLED_RECIPE" "$work/err9" || fail "the bundled recipe refusal does not name it: $(cat "$work/err9")"
+[ -e "$work/w8" ] && fail "train_bundled_models started work before refusing the recipe"
 AGEX_EVAL_RECIPE=forest bash "$src/scripts/evaluate_bonn.sh" "$work/fold" 7,8 "$work/no_build" 2> "$work/err5" \
   && fail "evaluate_bonn took an unknown recipe"
 grep -q "AGEX_EVAL_RECIPE" "$work/err5" || fail "the recipe refusal does not name it: $(cat "$work/err5")"

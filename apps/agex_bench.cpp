@@ -5,7 +5,10 @@
 //     pipeline stage by stage. Single-threaded.
 //   agex_bench --dataset DIR: the whole detector (pipeline, patches, classifier) on every
 //     frame of a dataset, stage by stage, on one core; then frames per second with --jobs.
+//   agex_bench --dataset DIR --compare-with BUILD_DIR: this build and another in turns,
+//     every stage's ratio.
 
+#include <agex/apps/bench_compare.h>
 #include <agex/apps/bench_flags.h>
 #include <agex/apps/bench_runs.h>
 #include <agex/apps/command_line.h>
@@ -14,7 +17,39 @@
 #include <agex/apps/output_guard.h>
 #include <agex/io/atomic_file.h>
 
+#include <cstdlib>
+#include <filesystem>
 #include <iostream>
+
+namespace
+{
+/** --compare-with: both builds in turns, their reports in a scratch folder removed after. */
+nlohmann::json
+compareWith (const agex::apps::BenchFlags &flags, int argc, char **argv)
+{
+  agex::apps::BenchComparison comparison;
+  comparison.this_program = std::filesystem::read_symlink ("/proc/self/exe").string ();
+  comparison.other_program = agex::apps::otherBenchProgram (flags.compare_with);
+  comparison.arguments = agex::apps::forwardedBenchArguments (argc, argv);
+  comparison.rounds = flags.rounds;
+  std::string scratch = (std::filesystem::temp_directory_path () / "agex_bench_compare_XXXXXX").string ();
+  if (!mkdtemp (scratch.data ()))
+    throw std::runtime_error ("cannot make a scratch folder in " + std::filesystem::temp_directory_path ().string ());
+  comparison.work_dir = scratch;
+  try
+  {
+    nlohmann::json doc = agex::apps::compareBenchBuilds (comparison);
+    doc["dataset"] = flags.dataset_spec;
+    std::filesystem::remove_all (scratch);
+    return doc;
+  }
+  catch (...)
+  {
+    std::cerr << "agex_bench: the runs' reports and output are kept in " << scratch << "\n";
+    throw;
+  }
+}
+}  // namespace
 
 int
 main (int argc, char **argv)
@@ -36,8 +71,11 @@ main (int argc, char **argv)
         read.add (flags.detector.model);
         agex::apps::checkOutputPath (flags.json_path, "agex_bench report", agex::apps::benchReportRecogniser (), read);
       }
-      doc = agex::apps::benchDataset (flags.dataset_spec, flags.keyframes_only,
-                                      agex::apps::loadDetector (flags.detector), flags.passes, flags.jobs);
+      if (!flags.compare_with.empty ())
+        doc = compareWith (flags, argc, argv);
+      else
+        doc = agex::apps::benchDataset (flags.dataset_spec, flags.keyframes_only,
+                                        agex::apps::loadDetector (flags.detector), flags.passes, flags.jobs);
     }
     else
     {

@@ -1273,6 +1273,42 @@ TEST_F (BodyPartApps, BenchDatasetReportsStagesAndThroughput)
              0);
 }
 
+TEST_F (BodyPartApps, BenchComparesTwoBuildsInTurns)
+{
+  // This build against itself (the build folder of agex_bench): the stages both time, a ratio
+  // each; the runs' scratch reports are gone afterwards.
+  const std::string json = tmp_.file ("compare.json");
+  const std::string build = fs::path (AGEX_BENCH_EXECUTABLE).parent_path ().parent_path ().string ();
+  ASSERT_EQ (run (quoted (AGEX_BENCH_EXECUTABLE) + " --dataset " + quoted (dataset () + "@1") + " --keyframes --model " +
+                  quoted (model ()) + " --passes 1 --rounds 2 --compare-with " + quoted (build) + " --json " +
+                  quoted (json) + " >> " + quoted (log ()) + " 2>&1"),
+             0)
+      << readText (log ());
+  const auto doc = nlohmann::json::parse (readText (json));
+  EXPECT_EQ (doc.at ("rounds").get<int> (), 2);
+  for (const char *stage : {"agex", "classify", "patches"})
+  {
+    ASSERT_TRUE (doc.at ("stages").contains (stage)) << stage;
+    EXPECT_GT (doc["stages"][stage].at ("this_ms").get<double> (), 0.0) << stage;
+    EXPECT_GT (doc["stages"][stage].at ("other_ms").get<double> (), 0.0) << stage;
+    EXPECT_GT (doc["stages"][stage].at ("ratio").get<double> (), 0.0) << stage;
+  }
+  const double total_ratio = doc.at ("total").at ("ratio").get<double> ();
+  EXPECT_GT (total_ratio, 0.0);
+  EXPECT_NE (readText (log ()).find ("alternating rounds"), std::string::npos);
+
+  // A folder without agex_bench, and a comparison without a dataset, are refused by name.
+  const std::string out = tmp_.file ("compare_errors.txt");
+  EXPECT_EQ (run (quoted (AGEX_BENCH_EXECUTABLE) + " --dataset " + quoted (dataset ()) + " --compare-with " +
+                  quoted (tmp_.file ("no_build")) + " > " + quoted (out) + " 2>&1"),
+             1);
+  EXPECT_NE (readText (out).find ("no_build: no executable bin/agex_bench"), std::string::npos) << readText (out);
+  EXPECT_EQ (run (quoted (AGEX_BENCH_EXECUTABLE) + " --compare-with " + quoted (build) + " > " + quoted (out) + " 2>&1"),
+             1);
+  EXPECT_NE (readText (out).find ("--compare-with times the detector over a --dataset"), std::string::npos)
+      << readText (out);
+}
+
 TEST_F (BodyPartApps, DamagedModelIsAClearError)
 {
   const std::string damaged = tmp_.file ("damaged.yml");

@@ -30,7 +30,11 @@ parseBenchFlags (int argc, char **argv, BenchFlags &flags)
     ("bench-k", po::value (&flags.k)->default_value (flags.k), "k for the incremental vs naive comparison")
     ("repeat", po::value (&flags.repeat)->default_value (flags.repeat), "timed runs per measurement")
     ("no-portrait", po::bool_switch (&flags.no_portrait), "skip the 144x176 portrait view of 640x480 frames")
-    ("json", po::value (&flags.json_path), "write the figures as JSON here");
+    ("json", po::value (&flags.json_path), "write the figures as JSON here")
+    ("compare-with", po::value (&flags.compare_with),
+     "with --dataset: another build directory; run its bin/agex_bench and this one in turns, one thread each, and "
+     "print every stage's ratio this / other")
+    ("rounds", po::value (&flags.rounds)->default_value (flags.rounds), "with --compare-with: runs of each build");
   po::options_description all;
   all.add (general).add (detectorOptionsDescription (flags.detector, kBundledModelFile))
      .add (frameOptionsDescription (flags.frame_options))
@@ -41,8 +45,12 @@ parseBenchFlags (int argc, char **argv, BenchFlags &flags)
   if (!parseCommandLine (argc, argv, all, positional))
     return false;
   finishPipelineOptions (vector_flags, flags.params);
-  if (flags.k < 1 || flags.repeat < 1 || flags.passes < 1 || flags.jobs < 1)
-    throw std::runtime_error ("--bench-k, --repeat, --passes and --jobs must be at least 1");
+  if (flags.k < 1 || flags.repeat < 1 || flags.passes < 1 || flags.jobs < 1 || flags.rounds < 1)
+    throw std::runtime_error ("--bench-k, --repeat, --passes, --jobs and --rounds must be at least 1");
+  if (flags.repeat > 100000 || flags.passes > 1000 || flags.jobs > 1024 || flags.rounds > 100)
+    throw std::runtime_error ("--repeat must be at most 100000, --passes 1000, --jobs 1024 and --rounds 100");
+  if (!flags.compare_with.empty () && flags.dataset_spec.empty ())
+    throw std::runtime_error ("--compare-with times the detector over a --dataset: give one");
   if (flags.k > 1000)
     throw std::runtime_error ("--bench-k must be at most 1000 (the naive reference runs a full Dijkstra per point)");
   return true;

@@ -16,10 +16,10 @@ namespace apps
 OutputRecogniser
 benchReportRecogniser ()
 {
-  return [frames = jsonReportWith ({"k", "repeat", "frames"}),
-          dataset = jsonReportWith ({"dataset", "detector_mode"})] (const std::string &path) {
+  return [frames = jsonReportWith ({"k", "repeat", "frames"}), dataset = jsonReportWith ({"dataset", "detector_mode"}),
+          compared = jsonReportWith ({"compare_with", "rounds"})] (const std::string &path) {
     const std::string why = frames (path);
-    return why.empty () || dataset (path).empty () ? std::string () : why;
+    return why.empty () || dataset (path).empty () || compared (path).empty () ? std::string () : why;
   };
 }
 

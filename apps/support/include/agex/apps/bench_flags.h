@@ -20,6 +20,8 @@ struct BenchFlags
   std::vector<std::string> inputs;  ///< frame files (none: the bundled frame)
   std::string dataset_spec;         ///< DIR[@SEQ,...]: time the detector on its frames instead
   std::string json_path;
+  std::string compare_with;  ///< another build directory: alternate runs of both and compare
+  int rounds = 5;            ///< alternating rounds of --compare-with
   bool keyframes_only = false, no_portrait = false;
   int k = 20, repeat = 30, passes = 3;
   int jobs = static_cast<int> (std::max (1u, std::thread::hardware_concurrency ()));

@@ -120,7 +120,7 @@ agex::FloorRemoval<PointT>::findFloor (pcl::IndicesPtr sample)
     Eigen::VectorXf coefficients (4);
     ransac.getModelCoefficients (coefficients);
     Eigen::VectorXf refined = coefficients;
-    if (inliers.size () >= 3)  // fewer: PCL keeps the coefficients (and says so)
+    if (inliers.size () > 3)  // fewer: PCL keeps the coefficients (and says so, also at exactly 3)
       model->optimizeModelCoefficients (inliers, coefficients, refined);
     model->selectWithinDistance (refined, distance_, inliers);
     if (static_cast<int> (inliers.size ()) < min_inliers_ / 4 || refined.size () != 4)

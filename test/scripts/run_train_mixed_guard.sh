@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# scripts/train_mixed_models.sh and evaluate_moved.sh write only what is theirs.
+# scripts/train_mixed_models.sh, evaluate_moved.sh and real_frame_overlays.sh write only what is theirs.
 # train_mixed_models.sh never writes over models already in its output folder (unless
 # AGEX_TRAIN_FORCE=1) and refuses a bad AGEX_TRAIN_SCALE, AGEX_TRAIN_HOLDOUT,
 # AGEX_TRAIN_BACKGROUND_RATIO or AGEX_TRAIN_DETECTORS before any work, as train_bundled_models.sh
@@ -60,4 +60,10 @@ echo x > "$work/afile"
 bash "$src/scripts/evaluate_moved.sh" "$work/afile" 7,8 "$src/data/models/agex_bonn.yml" -- "$work/no_build" \
   2> /dev/null && fail "evaluate_moved took a file for its folder"
 [ "$(cat "$work/afile")" = x ] || fail "evaluate_moved changed a file given as its folder"
+# scripts/real_frame_overlays.sh writes only into a folder of its own.
+mkdir -p "$work/photos" && echo "a picture of mine" > "$work/photos/five_people.png"
+bash "$src/scripts/real_frame_overlays.sh" "$work/photos" "$src/data/models/agex_bonn.yml" "$work/no_build" \
+  2> "$work/err10" && fail "real_frame_overlays wrote into a folder of other things"
+[ "$(cat "$work/photos/five_people.png")" = "a picture of mine" ] || fail "real_frame_overlays changed a file it did not write"
+grep -q "not an earlier real_frame_overlays folder" "$work/err10" || fail "the overlay refusal does not say why: $(cat "$work/err10")"
 [ "$failures" = 0 ] && echo "train_mixed_models and evaluate_moved guards: all checks passed"

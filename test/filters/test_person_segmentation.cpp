@@ -656,8 +656,9 @@ TEST (PersonSegmentation, HeadAndShouldersCutByTheLowerBorderAreAPerson)
 {
   // A camera 1.75 m high, 0.9 m from someone, no floor in view (background removed): the
   // image's lower border crosses the chest at about 1.34 m, so the head, the neck and the
-  // tops of the shoulders show, less than a whole person's least area; a box of about that
-  // size cut by the border is still no one (as wide on top as below).
+  // tops of the shoulders show, less than a whole person's least area. A box of about that
+  // size cut by the border (0.33 m wide, 0.32 m of it in view: upright enough for the
+  // floor-free rule) is still no one: it is as wide on top as below.
   Scene scene;
   scene.floor = false;
   scene.camera_height = 1.75;
@@ -679,7 +680,7 @@ TEST (PersonSegmentation, HeadAndShouldersCutByTheLowerBorderAreAPerson)
   Scene box_scene;
   box_scene.floor = false;
   box_scene.camera_height = 1.75;
-  box_scene.addBox (-0.15, 0.15, 1.0, 1.6, 0.9, 1.1);
+  box_scene.addBox (-0.165, 0.165, 1.0, 1.66, 0.9, 1.1);
   const Found box = segment (box_scene.render (cam));
   EXPECT_TRUE (box.persons.empty ());
 }

@@ -372,6 +372,7 @@ private:
   void clusterCells (detail::PersonScan &scan) const;
   void findCandidates (const detail::PersonScan &scan, std::vector<detail::PersonCandidate> &people,
                        std::vector<detail::PersonCandidate> &leftovers) const;
+  float minPersonArea (const detail::PersonPartStats &s) const;
   bool splitAtHeads (const detail::PersonScan &scan, const detail::PersonPart &part,
                      const detail::PersonPartStats &s, detail::PersonPart &left, detail::PersonPart &right) const;
   std::vector<detail::PersonCut> headCuts (const detail::PersonScan &scan, const detail::PersonPartStats &s) const;

@@ -780,7 +780,7 @@ agex::PersonSegmentation<PointT>::measure (const detail::PersonScan &scan, const
   });
   if (!s.cells)
     return;
-  if (s.area < min_area_)
+  if (s.area < minPersonArea (s))
   {
     // Too small for anyone (a possible piece of someone): the bins are not needed.
     s.width = s.width_across = std::max (s.lat_max - s.lat_min, s.fwd_max - s.fwd_min);
@@ -897,6 +897,14 @@ agex::PersonSegmentation<PointT>::outline (const detail::PersonScan &scan, const
   s.outlined = true;
 }
 
+/** A body cut off by the image's border shows less of itself (a head and shoulders at the
+  * lower border, half a body at a side): it needs only a hidden person's area. */
+template <typename PointT> float
+agex::PersonSegmentation<PointT>::minPersonArea (const detail::PersonPartStats &s) const
+{
+  return s.border ? std::min (hidden_min_area_, min_area_) : min_area_;
+}
+
 /** The rules of a person (doc/pipeline.md, "People"), cheapest first. */
 template <typename PointT> agex::detail::PersonVerdict
 agex::PersonSegmentation<PointT>::verdict (const detail::PersonScan &scan, const std::vector<detail::PersonPart> &parts,
@@ -905,9 +913,7 @@ agex::PersonSegmentation<PointT>::verdict (const detail::PersonScan &scan, const
   using detail::PersonVerdict;
   if (!s.cells)
     return PersonVerdict::kEmpty;
-  // A body cut off by the image's border shows less of itself: a head and shoulders at its
-  // lower border, half a body at a side.
-  if (s.area < (s.border ? hidden_min_area_ : min_area_))
+  if (s.area < minPersonArea (s))
     return PersonVerdict::kTooSmall;
   if (s.width > max_width_)
     return PersonVerdict::kTooWide;

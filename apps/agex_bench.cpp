@@ -17,7 +17,9 @@
 #include <agex/apps/output_guard.h>
 #include <agex/io/atomic_file.h>
 
+#include <cerrno>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <iostream>
 
@@ -32,9 +34,12 @@ compareWith (const agex::apps::BenchFlags &flags, int argc, char **argv)
   comparison.other_program = agex::apps::otherBenchProgram (flags.compare_with);
   comparison.arguments = agex::apps::forwardedBenchArguments (argc, argv);
   comparison.rounds = flags.rounds;
+  comparison.model = std::filesystem::absolute (flags.detector.model).string ();
+  comparison.passes = flags.passes;
   std::string scratch = (std::filesystem::temp_directory_path () / "agex_bench_compare_XXXXXX").string ();
   if (!mkdtemp (scratch.data ()))
-    throw std::runtime_error ("cannot make a scratch folder in " + std::filesystem::temp_directory_path ().string ());
+    throw std::runtime_error ("cannot make a scratch folder in " + std::filesystem::temp_directory_path ().string () +
+                              ": " + std::strerror (errno));
   comparison.work_dir = scratch;
   try
   {

@@ -20,7 +20,9 @@ fi
 [ -e "$OUT" ] && [ ! -d "$OUT" ] && { echo "real_frame_overlays: $OUT is a file" >&2; exit 1; }
 mkdir -p "$OUT" && touch "$OUT/.real_frame_overlays"
 frames=("$KINECT/five_people.pcd")
+shopt -s nullglob
 for f in "$KINECT"/skeltrack/depth-data-*.u16; do frames+=("$f"); done
+shopt -u nullglob
 for f in "${frames[@]}"; do
   name=$(basename "${f%.*}")
   "$BIN/agex_detect" "$f" --model "$MODEL" --min-confidence 0.3 --overlay "$OUT/$name.png" --json "$OUT/$name.json" \

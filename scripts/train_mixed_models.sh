@@ -43,15 +43,19 @@ HOLDOUT="${AGEX_TRAIN_HOLDOUT:-}"
 # Forests trained without the held-out sequences get their own names in WORK_DIR.
 TAG=${HOLDOUT:+_without_${HOLDOUT//,/}}
 RATIO="${AGEX_TRAIN_BACKGROUND_RATIO:-4}"
-python3 -c "import sys; r = float(sys.argv[1]); sys.exit(0 if 0 <= r <= 1000 else 1)" "$RATIO" 2> /dev/null ||
-  { echo "train_mixed_models: AGEX_TRAIN_BACKGROUND_RATIO must be 0-1000, not '$RATIO'" >&2; exit 1; }
-DETECTORS="${AGEX_TRAIN_DETECTORS:-fused agex sw}"
-for d in $DETECTORS; do
+[[ "$RATIO" =~ ^[0-9]+(\.[0-9]+)?$ ]] &&
+  python3 -c "import sys; sys.exit(0 if float(sys.argv[1]) <= 1000 else 1)" "$RATIO" 2> /dev/null ||
+  { echo "train_mixed_models: AGEX_TRAIN_BACKGROUND_RATIO must be a number 0-1000, not '$RATIO'" >&2; exit 1; }
+read -ra DETECTOR_LIST <<< "${AGEX_TRAIN_DETECTORS:-fused agex sw}"
+[ ${#DETECTOR_LIST[@]} -gt 0 ] || { echo "train_mixed_models: AGEX_TRAIN_DETECTORS is empty" >&2; exit 1; }
+seen=" "
+for d in "${DETECTOR_LIST[@]}"; do
   case "$d" in fused|agex|sw) ;; *)
     echo "train_mixed_models: AGEX_TRAIN_DETECTORS lists fused, agex and sw, not '$d'" >&2; exit 1 ;;
   esac
+  [[ "$seen" == *" $d "* ]] && { echo "train_mixed_models: AGEX_TRAIN_DETECTORS names $d twice" >&2; exit 1; }
+  seen="$seen$d "
 done
-[ -n "${DETECTORS// /}" ] || { echo "train_mixed_models: AGEX_TRAIN_DETECTORS is empty" >&2; exit 1; }
 frames () { python3 -c "import sys; print(max(20, round($1 * float(sys.argv[1]))))" "$SCALE"; }
 for need in "$SHARED/bonn" "$SHARED/mocap/cmu_cc" "$SHARED/mocap/cmu_poses" "$SHARED/makehuman/targets"; do
   [ -d "$need" ] || { echo "train_mixed_models: $need is missing (see ../shared/README.md)" >&2; exit 1; }
@@ -142,12 +146,13 @@ done
 
 # 4. The detectors, written into OUT_DIR (the fused model names its forest relative to
 # itself, so the forest goes there first).
-cp "$WORK/forest$TAG.agexforest" "$MODELS/agex_bonn_forest.agexforest"
+# Only with the fused detector: a fused model already there keeps the forest it was trained on.
+[[ "$seen" == *" fused "* ]] && cp "$WORK/forest$TAG.agexforest" "$MODELS/agex_bonn_forest.agexforest"
 RECIPE=(--k 16 --weak-count 200 --fragments 100 --random-negatives 3)
 # agex_train uses one core: the detectors train side by side.
-stamp "detectors: $DETECTORS"
+stamp "detectors: ${DETECTOR_LIST[*]}"
 jobs_started=()
-for d in $DETECTORS; do
+for d in "${DETECTOR_LIST[@]}"; do
   case "$d" in
   fused) "$BIN/agex_train" --fused --forest "$MODELS/agex_bonn_forest.agexforest" "${fold_args[@]}" "${RECIPE[@]}" \
            --background-ratio "$RATIO" --out "$MODELS/agex_bonn.yml" > "$WORK/fused$TAG.log" 2>&1 & ;;

@@ -11,7 +11,7 @@
 set -u
 src=$1 work=$2
 shared="$src/../shared/data"
-for need in bonn mocap/cmu_cc mocap/cmu_poses makehuman/targets; do
+for need in bonn mocap/cmu_cc mocap/cmu_poses makehuman/targets kinect/skeltrack; do
   [ -d "$shared/$need" ] || { echo "SKIP: $shared/$need is missing"; exit 77; }
 done
 failures=0
@@ -36,7 +36,12 @@ grep -q "AGEX_TRAIN_BACKGROUND_RATIO" "$work/err7" || fail "the ratio refusal do
 AGEX_TRAIN_DETECTORS="fused forest" bash "$src/scripts/train_mixed_models.sh" "$work/new" "$work/no_build" "$work/w7" \
   2> "$work/err8" && fail "AGEX_TRAIN_DETECTORS with an unknown detector was accepted"
 grep -q "AGEX_TRAIN_DETECTORS" "$work/err8" || fail "the detector refusal does not name it: $(cat "$work/err8")"
-[ -e "$work/w6" ] || [ -e "$work/w7" ] && fail "it started work before refusing the ratio or the detectors"
+AGEX_TRAIN_DETECTORS="fused fused" bash "$src/scripts/train_mixed_models.sh" "$work/new" "$work/no_build" "$work/w9" \
+  2> "$work/err11" && fail "AGEX_TRAIN_DETECTORS naming a detector twice was accepted"
+grep -q "names fused twice" "$work/err11" || fail "the repeated-detector refusal does not say why: $(cat "$work/err11")"
+AGEX_TRAIN_BACKGROUND_RATIO="4_0" bash "$src/scripts/train_mixed_models.sh" "$work/new" "$work/no_build" "$work/w10" \
+  2> /dev/null && fail "AGEX_TRAIN_BACKGROUND_RATIO=4_0 was accepted"
+[ -e "$work/w6" ] || [ -e "$work/w7" ] || [ -e "$work/w9" ] || [ -e "$work/w10" ] && fail "it started work before refusing the ratio or the detectors"
 AGEX_BUNDLED_RECIPE=forest bash "$src/scripts/train_bundled_models.sh" "$work/no_build" "$work/w8" 2> "$work/err9" \
   && fail "train_bundled_models took an unknown recipe"
 grep -q "AGEX_BUNDLED_RECIPE" "$work/err9" || fail "the bundled recipe refusal does not name it: $(cat "$work/err9")"

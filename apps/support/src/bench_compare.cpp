@@ -1,6 +1,8 @@
 #include <agex/apps/bench_compare.h>
 
 #include <algorithm>
+#include <cerrno>
+#include <cstring>
 #include <cstdio>
 #include <fstream>
 #include <map>
@@ -21,8 +23,9 @@ namespace apps
 {
 namespace
 {
-/** Runs program with arguments, its output to log; returns its exit status (-1: not run). */
-int
+/** Runs program with arguments, its output to log. \return "" when it exited with 0, else what
+  * went wrong (its exit status, the signal that ended it, or why it could not start). */
+std::string
 runProgram (const std::string &program, const std::vector<std::string> &arguments, const std::string &log)
 {
   std::vector<char *> argv;
@@ -31,18 +34,30 @@ runProgram (const std::string &program, const std::vector<std::string> &argument
     argv.push_back (const_cast<char *> (a.c_str ()));
   argv.push_back (nullptr);
   posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init (&actions);
-  posix_spawn_file_actions_addopen (&actions, STDOUT_FILENO, log.c_str (), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  posix_spawn_file_actions_adddup2 (&actions, STDOUT_FILENO, STDERR_FILENO);
+  if (posix_spawn_file_actions_init (&actions) != 0)
+    return "cannot set up its start";
+  int spawned =
+      posix_spawn_file_actions_addopen (&actions, STDOUT_FILENO, log.c_str (), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  if (spawned == 0)
+    spawned = posix_spawn_file_actions_adddup2 (&actions, STDOUT_FILENO, STDERR_FILENO);
   pid_t pid = 0;
-  const int spawned = posix_spawn (&pid, program.c_str (), &actions, nullptr, argv.data (), environ);
+  if (spawned == 0)
+    spawned = posix_spawn (&pid, program.c_str (), &actions, nullptr, argv.data (), environ);
   posix_spawn_file_actions_destroy (&actions);
   if (spawned != 0)
-    return -1;
+    return std::string ("could not start: ") + std::strerror (spawned);
   int status = 0;
-  if (waitpid (pid, &status, 0) != pid)
-    return -1;
-  return WIFEXITED (status) ? WEXITSTATUS (status) : -1;
+  pid_t waited;
+  while ((waited = waitpid (pid, &status, 0)) < 0 && errno == EINTR)
+  {
+  }
+  if (waited != pid)
+    return std::string ("could not be waited for: ") + std::strerror (errno);
+  if (WIFSIGNALED (status))
+    return "was ended by signal " + std::to_string (WTERMSIG (status));
+  if (!WIFEXITED (status) || WEXITSTATUS (status) != 0)
+    return "failed (exit " + std::to_string (WIFEXITED (status) ? WEXITSTATUS (status) : -1) + ")";
+  return "";
 }
 
 double
@@ -71,12 +86,16 @@ stageMedians (const std::string &report, const std::string &program)
     throw std::runtime_error (report + " (of " + program + "): not a JSON report: " + e.what ());
   }
   std::map<std::string, double> medians;
-  if (!doc.contains ("ms_per_frame") || !doc.contains ("stages") || !doc["stages"].is_object ())
+  const auto number = [] (const nlohmann::json &stats) {
+    return stats.is_object () && stats.contains ("median") && stats["median"].is_number ();
+  };
+  if (!doc.is_object () || !doc.contains ("ms_per_frame") || !number (doc["ms_per_frame"]) || !doc.contains ("stages") ||
+      !doc["stages"].is_object ())
     throw std::runtime_error (report + " (of " + program + "): not an agex_bench --dataset report");
-  medians["total"] = doc["ms_per_frame"].value ("median", 0.0);
+  medians["total"] = doc["ms_per_frame"]["median"].get<double> ();
   for (const auto &[stage, stats] : doc["stages"].items ())
-    if (stats.is_object ())
-      medians[stage] = stats.value ("median", 0.0);
+    if (number (stats))
+      medians[stage] = stats["median"].get<double> ();
   return medians;
 }
 }  // namespace
@@ -84,7 +103,7 @@ stageMedians (const std::string &report, const std::string &program)
 std::vector<std::string>
 forwardedBenchArguments (int argc, char **argv)
 {
-  static const char *const kOwn[] = {"--compare-with", "--rounds", "--json", "--jobs"};
+  static const char *const kOwn[] = {"--compare-with", "--rounds", "--json", "--jobs", "--model", "--passes"};
   std::vector<std::string> kept;
   for (int i = 1; i < argc; ++i)
   {
@@ -136,11 +155,11 @@ compareBenchBuilds (const BenchComparison &c)
       const int which = (round % 2 == 0) ? turn : 1 - turn;  // this first in even rounds
       const std::string stem = c.work_dir + "/round" + std::to_string (round) + (which == 0 ? "_this" : "_other");
       std::vector<std::string> arguments = c.arguments;
-      arguments.insert (arguments.end (), {"--jobs", "1", "--json", stem + ".json"});
-      const int status = runProgram (programs[which], arguments, stem + ".log");
-      if (status != 0)
-        throw std::runtime_error (programs[which] + " failed (exit " + std::to_string (status) + "; its output: " +
-                                  stem + ".log)");
+      arguments.insert (arguments.end (), {"--model", c.model, "--passes", std::to_string (c.passes), "--jobs", "1",
+                                           "--json", stem + ".json"});
+      const std::string problem = runProgram (programs[which], arguments, stem + ".log");
+      if (!problem.empty ())
+        throw std::runtime_error (programs[which] + " " + problem + " (its output: " + stem + ".log)");
       medians[which] = stageMedians (stem + ".json", programs[which]);
     }
     for (const auto &[stage, ms] : medians[0])

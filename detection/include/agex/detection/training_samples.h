@@ -48,9 +48,9 @@ void collectFusedTrainingSamples (const DepthPipelineResult &prepared, const pcl
                                   std::vector<std::vector<float>> &auxiliary, std::vector<int> &classes);
 
 /** \brief Keeps at most max_ratio background examples (label -1) per positive, chosen
-  * uniformly at random, and every positive, in their order. Background candidates far from any
-  * part outnumber the parts about ten to one on whole scenes; boosting learns little from most
-  * of them but pays for all of them. max_ratio 0 keeps everything; auxiliary may be empty or
+  * uniformly at random, and every positive, in their order. On whole scenes the background
+  * candidates far from any part outnumber the parts many times over; boosting learns little
+  * from most of them but pays for all of them. max_ratio 0 keeps everything; auxiliary may be empty or
   * hold a row per example.
   * \return the background examples dropped */
 std::size_t keepBackgroundAtMost (float max_ratio, std::mt19937_64 &rng, std::vector<agex::DepthPatch> &patches,

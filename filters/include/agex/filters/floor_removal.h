@@ -15,9 +15,10 @@ namespace agex
   * a tilted plane through a patch of wall) is not the floor, and removing everything
   * below it would take the legs. Such a plane is rejected when more than a quarter of its
   * inlier count lies clearly under it (by 0.10 m, or three distance thresholds if more),
-  * or when the viewpoint (the cloud's sensor origin) is not above it by more than the
+  * or when the viewpoint (the cloud's sensor_origin_) is not above it by more than the
   * distance threshold (a camera sees a floor from above; a steep plane through a torso or a
-  * wall may pass over it), and RANSAC tries again among the points under it, where the
+  * wall may pass over it; a cloud moved into another frame, e.g. by pcl::transformPointCloud,
+  * must have its sensor_origin_ moved with it, or its floor may pass through the origin), and RANSAC tries again among the points under it, where the
   * floor must be and where it is no longer outnumbered; at most max attempts planes are
   * tried.
   *

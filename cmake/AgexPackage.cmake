@@ -20,7 +20,7 @@ install(FILES ${PROJECT_BINARY_DIR}/agexConfig.cmake ${PROJECT_BINARY_DIR}/agexC
 
 install(FILES ${PROJECT_SOURCE_DIR}/data/models/agex_bonn.yml ${PROJECT_SOURCE_DIR}/data/models/agex_bonn_sw.yml
   ${PROJECT_SOURCE_DIR}/data/models/agex_bonn_agex.yml ${PROJECT_SOURCE_DIR}/data/models/agex_bonn_forest.agexforest
-  ${PROJECT_SOURCE_DIR}/data/models/LICENSE.bonn-data
+  ${PROJECT_SOURCE_DIR}/data/models/LICENSE.bonn-data ${PROJECT_SOURCE_DIR}/data/models/LICENSE.agex_bonn
   ${PROJECT_SOURCE_DIR}/data/models/agex_synthetic_forest.agexforest
   ${PROJECT_SOURCE_DIR}/data/models/LICENSE.agex_synthetic_forest DESTINATION ${CMAKE_INSTALL_DATADIR}/agex/models)
 if(TARGET agex_landmarks_lib)

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Trains a forest and three detectors (fused, AGEX-only, sliding window) on the mix issue #33
-# asks for (doc/results.md, "Every distance, every camera"); the candidate recipe for the
-# bundled models, which are not retrained with it yet. Each model sees the same mix of
+# asks for (doc/results.md, "Every distance, every camera"); the bundled models' recipe
+# (scripts/train_bundled_models.sh). Each model sees the same mix of
 #   - synthetic people (MakeHuman bodies of sampled shapes, the training part of the pose split
 #     of scripts/pose_split.sh, whole scenes with 1-3 people at 0.8-6 m, with and without floor
 #     and background, cut by the borders, close-range upper bodies) through every sensor model
@@ -18,9 +18,9 @@
 # WORK_DIR skips the datasets and forests already there. AGEX_TRAIN_SCALE (0.05-1, default 1)
 # renders that fraction of the synthetic frames and moves only the keyframes: a quick trial
 # (0.1: about 20 minutes on 2 cores). At full scale on 2 cores: the datasets 14 minutes, the
-# forest 8, the four cross-fitting forests 16, then the fused classifier about an hour on one
-# core (276,000 patches), the AGEX-only and sliding-window models beside it longer (their end
-# was not yet measured: doc/results.md, "The mix, held out"). AGEX_TRAIN_HOLDOUT (Bonn sequences, e.g. 7,8) leaves
+# forest 9, the four cross-fitting forests 18, then the detectors side by side: the fused
+# classifier 31 minutes (139,000 patches with the background at 4 per positive), the sliding
+# window 44; the AGEX-only model's end was not yet measured. AGEX_TRAIN_HOLDOUT (Bonn sequences, e.g. 7,8) leaves
 # those sequences and their re-projected copies out of every model, for a held-out evaluation;
 # the rendered datasets are shared with other runs in the same WORK_DIR. Existing models in
 # OUT_DIR are kept unless AGEX_TRAIN_FORCE=1. AGEX_TRAIN_BACKGROUND_RATIO (default 4, 0 keeps

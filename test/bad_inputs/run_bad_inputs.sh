@@ -299,8 +299,8 @@ fi
 check "a .u16 frame that is a FIFO" 1 "frame.u16: is a FIFO \\(named pipe\\), not a regular file" timeout 20 $D fifo/frame.u16 --json out/a.json
 
 # Model settings are checked like the flags they mirror (file and key named).
-sed 's/\\"mixed_window_radius\\":2,/\\"mixed_window_radius\\":1000000,/' in/model.yml > in/mixed_radius_model.yml
-sed 's/\\"median_window\\":3,/\\"median_window\\":100000,/' in/model.yml > in/median_model.yml
+sed 's/\\"mixed_window_radius\\":-\?[0-9]*,/\\"mixed_window_radius\\":1000000,/' in/model.yml > in/mixed_radius_model.yml
+sed 's/\\"median_window\\":-\?[0-9]*,/\\"median_window\\":100000,/' in/model.yml > in/median_model.yml
 sed 's/\\"k\\":16,/\\"k\\":100000000,/' in/model.yml > in/k_model.yml
 sed 's/\\"delta_connected\\":[0-9.e-]*,/\\"delta_connected\\":-1,/' in/model.yml > in/delta_model.yml
 for f in mixed_radius median k delta; do

@@ -191,6 +191,7 @@ collectFusedTrainingSamples (const DepthPipelineResult &prepared, const pcl::Poi
     classes.push_back (tip < 0 ? -1 : static_cast<int> (truth[tip].part));
   }
 }
+
 std::size_t
 keepBackgroundAtMost (float max_ratio, std::mt19937_64 &rng, std::vector<agex::DepthPatch> &patches,
                       std::vector<std::vector<float>> &auxiliary, std::vector<int> &classes)

@@ -1279,7 +1279,9 @@ TEST_F (BodyPartApps, BenchComparesTwoBuildsInTurns)
   // each; the runs' scratch reports are gone afterwards.
   const std::string json = tmp_.file ("compare.json");
   const std::string build = fs::path (AGEX_BENCH_EXECUTABLE).parent_path ().parent_path ().string ();
-  ASSERT_EQ (run (quoted (AGEX_BENCH_EXECUTABLE) + " --dataset " + quoted (dataset () + "@1") + " --keyframes --model " +
+  const std::string scratch = tmp_.file ("scratch");
+  fs::create_directories (scratch);
+  ASSERT_EQ (run ("TMPDIR=" + quoted (scratch) + " " + quoted (AGEX_BENCH_EXECUTABLE) + " --dataset " + quoted (dataset () + "@1") + " --keyframes --model " +
                   quoted (model ()) + " --passes 1 --rounds 2 --compare-with " + quoted (build) + " --json " +
                   quoted (json) + " >> " + quoted (log ()) + " 2>&1"),
              0)
@@ -1296,6 +1298,7 @@ TEST_F (BodyPartApps, BenchComparesTwoBuildsInTurns)
   const double total_ratio = doc.at ("total").at ("ratio").get<double> ();
   EXPECT_GT (total_ratio, 0.0);
   EXPECT_NE (readText (log ()).find ("alternating rounds"), std::string::npos);
+  EXPECT_TRUE (fs::is_empty (scratch)) << "the runs' scratch folder was left behind";
 
   // A folder without agex_bench, and a comparison without a dataset, are refused by name.
   const std::string out = tmp_.file ("compare_errors.txt");

@@ -1,5 +1,7 @@
 #include <agex/apps/bench_compare.h>
 
+#include <agex/detection/benchmark.h>
+
 #include <algorithm>
 #include <cerrno>
 #include <cstring>
@@ -60,13 +62,11 @@ runProgram (const std::string &program, const std::vector<std::string> &argument
   return "";
 }
 
+/** The median as agex_bench reports every timing: a sample that was measured. */
 double
 median (std::vector<double> values)
 {
-  if (values.empty ())
-    return 0.0;
-  std::sort (values.begin (), values.end ());
-  return values[values.size () / 2];
+  return summariseTimings (std::move (values)).median;
 }
 
 /** Per stage ("total" for the whole frame), the report's median milliseconds. */

@@ -60,7 +60,9 @@ main (int argc, char **argv)
         agex::apps::writeJson (json_path, doc);
       if (!overlay_path.empty ())
         agex::apps::writePng (overlay_path,
-                              agex::apps::renderOverlay (*frame.cloud, result.meshes, result.interest_points));
+                              // on the working frame, whose pixels the meshes and points are
+                              agex::apps::renderOverlay (result.frame ? *result.frame : *frame.cloud, result.meshes,
+                                                         result.interest_points));
     }
 
     // The summary goes to standard error: without --json, standard output is the JSON alone.

@@ -20,13 +20,15 @@
 # (0.1: about 20 minutes on 2 cores). At full scale on 2 cores: the datasets 14 minutes, the
 # forest 9, the four cross-fitting forests 18, then the detectors side by side: the fused
 # classifier 31 minutes (139,000 patches with the background at 4 per positive), the sliding
-# window 44; the AGEX-only model's end was not yet measured. AGEX_TRAIN_HOLDOUT (Bonn sequences, e.g. 7,8) leaves
+# window 44, the AGEX-only model 43 (144,000 patches; measured beside two other training runs
+# on the 2 cores). AGEX_TRAIN_HOLDOUT (Bonn sequences, e.g. 7,8) leaves
 # those sequences and their re-projected copies out of every model, for a held-out evaluation;
 # the rendered datasets are shared with other runs in the same WORK_DIR. Existing models in
 # OUT_DIR are kept unless AGEX_TRAIN_FORCE=1. AGEX_TRAIN_BACKGROUND_RATIO (default 4, 0 keeps
 # all) thins the background examples of the fused and AGEX-only detectors to that many per
 # positive (agex_train --background-ratio); AGEX_TRAIN_DETECTORS (default "fused agex sw")
-# picks the detectors trained.
+# picks the detectors trained; AGEX_TRAIN_WORKING_SPACING (metres, default 0: every pixel)
+# trains the detectors at that working density (agex_train --working-spacing, doc/pipeline.md).
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 MODELS=${1:?usage: train_mixed_models.sh OUT_DIR [BUILD_DIR] [WORK_DIR]}
@@ -46,6 +48,10 @@ RATIO="${AGEX_TRAIN_BACKGROUND_RATIO:-4}"
 [[ "$RATIO" =~ ^[0-9]+(\.[0-9]+)?$ ]] &&
   python3 -c "import sys; sys.exit(0 if float(sys.argv[1]) <= 1000 else 1)" "$RATIO" 2> /dev/null ||
   { echo "train_mixed_models: AGEX_TRAIN_BACKGROUND_RATIO must be a number 0-1000, not '$RATIO'" >&2; exit 1; }
+SPACING="${AGEX_TRAIN_WORKING_SPACING:-0}"
+[[ "$SPACING" =~ ^0(\.[0-9]+)?$ ]] &&
+  python3 -c "import sys; sys.exit(0 if float(sys.argv[1]) <= 0.05 else 1)" "$SPACING" 2> /dev/null ||
+  { echo "train_mixed_models: AGEX_TRAIN_WORKING_SPACING must be metres 0-0.05, not '$SPACING'" >&2; exit 1; }
 read -ra DETECTOR_LIST <<< "${AGEX_TRAIN_DETECTORS:-fused agex sw}"
 [ ${#DETECTOR_LIST[@]} -gt 0 ] || { echo "train_mixed_models: AGEX_TRAIN_DETECTORS is empty" >&2; exit 1; }
 seen=" "
@@ -148,7 +154,7 @@ done
 # itself, so the forest goes there first).
 # Only with the fused detector: a fused model already there keeps the forest it was trained on.
 [[ "$seen" == *" fused "* ]] && cp "$WORK/forest$TAG.agexforest" "$MODELS/agex_bonn_forest.agexforest"
-RECIPE=(--k 16 --weak-count 200 --fragments 100 --random-negatives 3)
+RECIPE=(--k 16 --weak-count 200 --fragments 100 --random-negatives 3 --working-spacing "$SPACING")
 # agex_train uses one core: the detectors train side by side.
 stamp "detectors: ${DETECTOR_LIST[*]}"
 jobs_started=()
@@ -158,7 +164,8 @@ for d in "${DETECTOR_LIST[@]}"; do
            --background-ratio "$RATIO" --out "$MODELS/agex_bonn.yml" > "$WORK/fused$TAG.log" 2>&1 & ;;
   agex) "$BIN/agex_train" $(all_args) "${RECIPE[@]}" --background-ratio "$RATIO" --out "$MODELS/agex_bonn_agex.yml" \
           > "$WORK/agex$TAG.log" 2>&1 & ;;
-  sw) "$BIN/agex_train" --sliding-window $(all_args) --weak-count 300 --fragments 150 --out "$MODELS/agex_bonn_sw.yml" \
+  sw) "$BIN/agex_train" --sliding-window $(all_args) --weak-count 300 --fragments 150 --working-spacing "$SPACING" \
+        --out "$MODELS/agex_bonn_sw.yml" \
         > "$WORK/sw$TAG.log" 2>&1 & ;;
   esac
   jobs_started+=("$!:$d$TAG")

@@ -74,6 +74,7 @@ DepthPipelineParams::validate (const Namer &name) const
   checkRange (name, "depth_step_growth", depth_step_growth, 0, 0.02);
   checkRange (name, "min_mesh_size", min_mesh_size, -1, 1e8);  // -1: auto
   checkRange (name, "min_mesh_area", min_mesh_area, 0, 10);
+  checkRange (name, "working_spacing", working_spacing, 0, 0.05);
   checkRange (name, "k", k, 1, 200);
   checkRange (name, "delta_orient", delta_orient, 0, 1);
 }
@@ -114,6 +115,7 @@ DepthPipelineParams::toJson () const
           {"depth_step_growth", depth_step_growth},
           {"min_mesh_size", min_mesh_size},
           {"min_mesh_area", min_mesh_area},
+          {"working_spacing", working_spacing},
           {"k", k},
           {"delta_orient", delta_orient}};
 }
@@ -203,6 +205,8 @@ DepthPipelineParams::fromJson (const nlohmann::json &doc, const std::string &sou
   q.depth_step_growth = doc.contains ("depth_step_growth") ? static_cast<float> (number ("depth_step_growth", -kWide, kWide)) : 0.f;
   q.min_mesh_size = integer ("min_mesh_size", -kWide, kWide);
   q.min_mesh_area = optional ("min_mesh_area", 0.f);
+  // Models written before the working density ran at the sensor's.
+  q.working_spacing = optional ("working_spacing", 0.f);
   q.k = integer ("k", -kWide, kWide);
   q.delta_orient = static_cast<float> (number ("delta_orient", -kWide, kWide));
   q.validate (name);
@@ -218,6 +222,37 @@ runDepthPipeline (const pcl::PointCloud<pcl::PointXYZ>::ConstPtr &cloud, const D
   DepthPipelineResult result;
   pipeline.compute (result);
   return result;
+}
+
+Eigen::Vector2i
+DepthPipelineResult::inputPixel (int working_index) const
+{
+  const int width = filtered ? static_cast<int> (filtered->width) : 0;
+  if (width <= 0 || working_index < 0)
+    return Eigen::Vector2i (-1, -1);
+  return Eigen::Vector2i (stride * (working_index % width) + offset, stride * (working_index / width) + offset);
+}
+
+std::vector<pcl::PointIndices>
+DepthPipelineResult::meshesInInput () const
+{
+  if (stride <= 1)
+    return meshes;
+  const int width = static_cast<int> (input_width), height = static_cast<int> (input_height);
+  std::vector<pcl::PointIndices> out (meshes.size ());
+  for (std::size_t m = 0; m < meshes.size (); ++m)
+  {
+    for (const auto i : meshes[m].indices)
+    {
+      const Eigen::Vector2i sampled = inputPixel (i);
+      for (int v = sampled.y () - offset; v < sampled.y () - offset + stride && v < height; ++v)
+        for (int u = sampled.x () - offset; u < sampled.x () - offset + stride && u < width; ++u)
+          if (u >= 0 && v >= 0)
+            out[m].indices.push_back (v * width + u);
+    }
+    std::sort (out[m].indices.begin (), out[m].indices.end ());
+  }
+  return out;
 }
 
 std::vector<int>

@@ -23,16 +23,18 @@ exactClasses (const Dataset &dataset, const std::string &id, PartLabelledFrame &
 {
   const cv::Mat image = dataset.loadPartLabels (id);
   const auto &cloud = *out.prepared.filtered;
-  if (image.cols != static_cast<int> (cloud.width) || image.rows != static_cast<int> (cloud.height))
+  if (image.cols != static_cast<int> (out.prepared.input_width) || image.rows != static_cast<int> (out.prepared.input_height))
     throw DatasetError (dataset.partLabelPath (id) + ": not of the frame's size");
   std::map<int, int> parts;
   for (const auto &[label_id, name] : dataset.info ().part_labels)
     parts[label_id] = labelPartOfName (name);
-  for (int v = 0; v < image.rows; ++v)
-    for (int u = 0; u < image.cols; ++u)
+  // The filtered frame may sample the input (DepthPipelineParams::working_spacing).
+  for (int v = 0; v < static_cast<int> (cloud.height); ++v)
+    for (int u = 0; u < static_cast<int> (cloud.width); ++u)
     {
-      const int label_id = image.at<std::uint8_t> (v, u);
-      const int index = v * image.cols + u;
+      const int index = v * static_cast<int> (cloud.width) + u;
+      const Eigen::Vector2i pixel = out.prepared.inputPixel (index);
+      const int label_id = image.at<std::uint8_t> (pixel.y (), pixel.x ());
       if (label_id == 0 || !std::isfinite (cloud[static_cast<std::size_t> (index)].z))
         continue;
       const auto it = parts.find (label_id);
@@ -122,7 +124,8 @@ partLabelledFrame (const Dataset &dataset, const std::string &id, const DepthPip
     return false;
   const bool found = dataset.hasPartLabels () ? exactClasses (dataset, id, out)
                                               : weakClasses (dataset.labelsOf (id), weak, out);
-  out.cloud = raw_depth ? cloud : out.prepared.filtered;
+  const pcl::PointCloud<pcl::PointXYZ>::ConstPtr raw = out.prepared.frame ? out.prepared.frame : cloud;
+  out.cloud = raw_depth ? raw : out.prepared.filtered;
   return found;
 }
 

@@ -84,3 +84,46 @@ TEST (BodyPartDetectorReal, SkeltrackTwoPeopleHaveTheirOwnDetections)
   }
   EXPECT_EQ (persons.size (), 2u);
 }
+
+TEST (BodyPartDetectorWorkingDensity, DetectionsComeAtTheInputsPixelsAndWhereEveryPixelPutsThem)
+{
+  // The bundled Bonn frame (640x480, a person at about 2 m) through the bundled detector at
+  // every pixel and at a working spacing of 1 cm (every second pixel): the detections are
+  // reported at the input's pixels, where the camera sees their positions, and the head is
+  // found where the full-density run finds it.
+  const agex::Frame frame = agex::loadFrame (AGEX_SOURCE_DIR "/data/frames/bonn_1_002.png");
+  const auto fx = static_cast<float> (frame.intrinsics.fx), fy = static_cast<float> (frame.intrinsics.fy);
+  std::vector<agex::BodyPartDetection> found[2];
+  for (int k = 0; k < 2; ++k)
+  {
+    auto detector = agex::BodyPartDetector<pcl::PointXYZ>::fromModel (AGEX_SOURCE_DIR "/data/models/agex_bonn.yml");
+    agex::DetectorSettings settings = detector->getSettings ();
+    settings.pipeline.working_spacing = k == 0 ? 0.f : 0.01f;
+    detector->setSettings (settings);
+    detector->setFocalLength (fx, fy);
+    detector->setInputCloud (frame.cloud);
+    detector->compute (found[k]);
+    const agex::DepthPipelineResult &r = detector->getIntermediate ();
+    ASSERT_EQ (r.stride, k == 0 ? 1 : 2);
+    ASSERT_TRUE (r.filtered);
+    EXPECT_EQ (r.filtered->width, k == 0 ? 640u : 320u);
+    ASSERT_FALSE (found[k].empty ());
+    for (const auto &d : found[k])
+    {
+      SCOPED_TRACE ("detection at " + std::to_string (d.u) + ", " + std::to_string (d.v));
+      ASSERT_TRUE (d.u >= 0 && d.u < 640 && d.v >= 0 && d.v < 480);
+      EXPECT_NEAR (fx * d.position.x () / d.position.z () + frame.intrinsics.cx, d.u, 1.0 + r.stride);
+      EXPECT_NEAR (fy * d.position.y () / d.position.z () + frame.intrinsics.cy, d.v, 1.0 + r.stride);
+    }
+  }
+  const auto best_head = [] (const std::vector<agex::BodyPartDetection> &detections) {
+    const agex::BodyPartDetection *best = nullptr;
+    for (const auto &d : detections)
+      if (d.part == agex::BodyPart::Head && (!best || d.confidence > best->confidence))
+        best = &d;
+    return best;
+  };
+  const agex::BodyPartDetection *every = best_head (found[0]), *working = best_head (found[1]);
+  ASSERT_TRUE (every && working);
+  EXPECT_LT ((every->position - working->position).norm (), 0.1f);
+}

@@ -237,6 +237,84 @@ TEST (MetricPipeline, SynthesisedPeopleGiveTheSamePersonsAndLargestMeshesAtBothR
   EXPECT_GE (persons, 5);
 }
 
+TEST (MetricPipeline, AWorkingDensityGivesTheSamePersonsAndMeshesFromEveryFewPixels)
+{
+  // Synthesised people at 1.5-3.5 m by a noise-free 640x480 Kinect, the pipeline at the
+  // sensor's density and at a working spacing of 1 cm (every second to fourth pixel, by the
+  // farthest person's depth): the same persons, each person's area within 15%; the interest
+  // points and meshes name pixels of the working frame, which map back to the input's.
+  agex::SynthOptions options;
+  options.procedural_poses = 40;
+  options.sensor = agex::SynthSensor::Kinect;
+  options.seed = 21;
+  const agex::SynthGenerator generator (options);
+  agex::SensorModel exact = agex::renderSensorModel (agex::SynthSensor::Kinect);
+  exact.kinect_sigma_q = 0.0;
+  exact.kinect_edge_drop = exact.kinect_edge_drop_near = 0.0;
+  PipelineParams working;
+  working.working_spacing = 0.01f;
+  int persons = 0, sampled = 0;
+  for (std::uint64_t index = 0; index < 6; ++index)
+  {
+    const agex::SynthFrame frame = generator.render (index);
+    SCOPED_TRACE ("frame " + std::to_string (index));
+    agex::SynthRng rng (1);
+    agex::SynthFrame view;
+    agex::renderScene (frame.scene, agex::scaledTo (exact, 640, 480), rng, view);
+    const Cloud::Ptr cloud (new Cloud (view.cloud));
+    const PipelineResult full = agex::runDepthPipeline (cloud, PipelineParams ());
+    const PipelineResult work = agex::runDepthPipeline (cloud, working);
+    EXPECT_EQ (full.stride, 1);
+    float farthest = 0.f;
+    for (const auto &info : full.person_info)
+      farthest = std::max (farthest, info.distance);
+    // The stride the farthest person's depth asks for (1 beyond 3.5 m at f = 525).
+    const int expected = farthest > 0.f ? std::clamp (static_cast<int> (std::lround (0.01 * 525.0 / farthest)), 1, 8) : 1;
+    EXPECT_EQ (work.stride, expected < 2 ? 1 : expected) << "farthest person at " << farthest << " m";
+    EXPECT_NEAR (work.focal_length * work.stride, 525.f, 0.5f);
+    EXPECT_EQ (work.input_width, 640u);
+    EXPECT_EQ (work.input_height, 480u);
+    ASSERT_TRUE (work.filtered);
+    EXPECT_EQ (work.filtered->width, (640u - 1u - static_cast<unsigned> (work.offset)) / work.stride + 1u);
+    EXPECT_EQ (static_cast<bool> (work.frame), work.stride > 1);
+    sampled += work.stride > 1;
+    const auto a = summarise (full), b = summarise (work);
+    SCOPED_TRACE ("every pixel:" + describe (a) + "\nworking:" + describe (b));
+    ASSERT_EQ (full.persons.size (), work.persons.size ());
+    for (int person = 0; person < static_cast<int> (full.persons.size ()); ++person)
+    {
+      double area[2] = {0.0, 0.0};
+      for (int k = 0; k < 2; ++k)
+        for (const auto &m : k == 0 ? a : b)
+          if (m.person == person)
+            area[k] += m.area;
+      EXPECT_GT (area[0], 0.05) << "person " << person;
+      EXPECT_NEAR (area[1], area[0], 0.15 * area[0]) << "person " << person;
+      ++persons;
+    }
+    // Each interest point's input pixel is where the camera sees its position.
+    for (const auto &p : work.interest_points)
+    {
+      const Eigen::Vector2i pixel = work.inputPixel (p.v * static_cast<int> (work.filtered->width) + p.u);
+      const auto &original = (*cloud)[static_cast<std::size_t> (pixel.y ()) * 640 + pixel.x ()];
+      EXPECT_NEAR (525.0 * p.x / p.z + 319.5, pixel.x (), 1.0);
+      EXPECT_NEAR (525.0 * p.y / p.z + 239.5, pixel.y (), 1.0);
+      EXPECT_TRUE (std::isfinite (original.z));
+    }
+    // The meshes at the input's size cover about stride^2 input pixels per working pixel.
+    const auto in_input = work.meshesInInput ();
+    ASSERT_EQ (in_input.size (), work.meshes.size ());
+    for (std::size_t m = 0; m < work.meshes.size (); ++m)
+    {
+      EXPECT_LE (in_input[m].indices.size (), work.meshes[m].indices.size () * work.stride * work.stride);
+      EXPECT_GE (in_input[m].indices.size (), work.meshes[m].indices.size ());
+      EXPECT_TRUE (std::is_sorted (in_input[m].indices.begin (), in_input[m].indices.end ()));
+    }
+  }
+  EXPECT_GE (persons, 5);
+  EXPECT_GE (sampled, 3);  // most of these people are near enough to be sampled
+}
+
 // ---------------------------------------------------------------------------
 // (b) A 6 cm limb at 2.5 m survives the cleaning at both resolutions.
 
@@ -392,7 +470,9 @@ TEST (MetricSettings, StoredInModelsAndOlderModelsKeepTheirPixelSettings)
   changed.mixed_window_angle = 0.006f;
   changed.spur_min_width = 0.04f;
   changed.min_mesh_area = 0.01f;
+  changed.working_spacing = 0.012f;
   const PipelineParams read = PipelineParams::fromJson (changed.toJson (), "m.yml");
+  EXPECT_EQ (read.working_spacing, 0.012f);
   EXPECT_EQ (read.median_extent, 0.03f);
   EXPECT_EQ (read.mixed_window_angle, 0.006f);
   EXPECT_EQ (read.spur_min_width, 0.04f);
@@ -400,9 +480,10 @@ TEST (MetricSettings, StoredInModelsAndOlderModelsKeepTheirPixelSettings)
 
   // A model written before them: its pixel settings, no width rule, no area.
   nlohmann::json old = pixelSettings ().toJson ();
-  for (const char *key : {"median_extent", "mixed_window_angle", "spur_min_width", "min_mesh_area"})
+  for (const char *key : {"median_extent", "mixed_window_angle", "spur_min_width", "min_mesh_area", "working_spacing"})
     old.erase (key);
   const PipelineParams before = PipelineParams::fromJson (old, "old.yml");
+  EXPECT_EQ (before.working_spacing, 0.f);  // the sensor's density, as trained
   EXPECT_EQ (before.median_window, 3);
   EXPECT_EQ (before.mixed_window_radius, 2);
   EXPECT_EQ (before.spur_min_width, 0.f);
@@ -419,7 +500,9 @@ TEST (MetricSettings, StoredInModelsAndOlderModelsKeepTheirPixelSettings)
                                                                               {"spur_min_width", -0.01},
                                                                               {"spur_min_width", 2},
                                                                               {"min_mesh_area", -1},
-                                                                              {"min_mesh_area", 1e6}})
+                                                                              {"min_mesh_area", 1e6},
+                                                                              {"working_spacing", -0.001},
+                                                                              {"working_spacing", 0.06}})
   {
     nlohmann::json bad = defaults.toJson ();
     bad[key] = value;

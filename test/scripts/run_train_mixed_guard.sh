@@ -2,7 +2,7 @@
 # scripts/train_mixed_models.sh, evaluate_moved.sh and real_frame_overlays.sh write only what is theirs.
 # train_mixed_models.sh never writes over models already in its output folder (unless
 # AGEX_TRAIN_FORCE=1) and refuses a bad AGEX_TRAIN_SCALE, AGEX_TRAIN_HOLDOUT,
-# AGEX_TRAIN_BACKGROUND_RATIO or AGEX_TRAIN_DETECTORS before any work, as train_bundled_models.sh
+# AGEX_TRAIN_BACKGROUND_RATIO, AGEX_TRAIN_DETECTORS or AGEX_TRAIN_WORKING_SPACING before any work, as train_bundled_models.sh
 # an unknown AGEX_BUNDLED_RECIPE;
 # evaluate_bonn.sh refuses an unknown AGEX_EVAL_RECIPE before making its folder, and a fold
 # folder of the other recipe. Skips (77) without
@@ -41,7 +41,13 @@ AGEX_TRAIN_DETECTORS="fused fused" bash "$src/scripts/train_mixed_models.sh" "$w
 grep -q "names fused twice" "$work/err11" || fail "the repeated-detector refusal does not say why: $(cat "$work/err11")"
 AGEX_TRAIN_BACKGROUND_RATIO="4_0" bash "$src/scripts/train_mixed_models.sh" "$work/new" "$work/no_build" "$work/w10" \
   2> /dev/null && fail "AGEX_TRAIN_BACKGROUND_RATIO=4_0 was accepted"
-[ -e "$work/w6" ] || [ -e "$work/w7" ] || [ -e "$work/w9" ] || [ -e "$work/w10" ] && fail "it started work before refusing the ratio or the detectors"
+for spacing in 0.06 -0.01 1e-2 abc; do
+  AGEX_TRAIN_WORKING_SPACING=$spacing bash "$src/scripts/train_mixed_models.sh" "$work/new" "$work/no_build" "$work/w11" \
+    2> "$work/err12" && fail "AGEX_TRAIN_WORKING_SPACING=$spacing was accepted"
+  grep -q "AGEX_TRAIN_WORKING_SPACING" "$work/err12" || fail "the spacing refusal does not name it: $(cat "$work/err12")"
+done
+[ -e "$work/w6" ] || [ -e "$work/w7" ] || [ -e "$work/w9" ] || [ -e "$work/w10" ] || [ -e "$work/w11" ] &&
+  fail "it started work before refusing the ratio, the detectors or the spacing"
 AGEX_BUNDLED_RECIPE=forest bash "$src/scripts/train_bundled_models.sh" "$work/no_build" "$work/w8" 2> "$work/err9" \
   && fail "train_bundled_models took an unknown recipe"
 grep -q "AGEX_BUNDLED_RECIPE" "$work/err9" || fail "the bundled recipe refusal does not name it: $(cat "$work/err9")"

@@ -77,9 +77,11 @@ detectFrame (const FrameJob &job, DetectorPool &detectors, const DetectFlags &fl
         doc["ms"][stage] = ms;
     doc["ms"]["total"] = std::chrono::duration<double, std::milli> (std::chrono::steady_clock::now () - start).count ();
     if (overlay)
-      *overlay = renderDetections (*frame.cloud, prepared.meshes, detections, flags.min_confidence);
+      *overlay = renderDetections (*frame.cloud, prepared.meshesInInput (), detections, flags.min_confidence);
     if (parts_overlay)
-      *parts_overlay = renderPartLabels (*frame.cloud, detector.getPartLabels (), detector.getPartModes (), {});
+      // The part labels are the working frame's pixels (DepthPipelineParams::working_spacing).
+      *parts_overlay = renderPartLabels (prepared.frame ? *prepared.frame : *frame.cloud, detector.getPartLabels (),
+                                         detector.getPartModes (), {});
     return doc;
   });
 }

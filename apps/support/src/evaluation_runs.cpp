@@ -573,12 +573,15 @@ evaluatePartLabels (const DatasetSelection &selection, const LoadedDetector &loa
     if (partLabelledFrame (selection.dataset, id, pipeline, weak, false, frame))
     {
       const auto start = std::chrono::steady_clock::now ();
+      // The cloud is the working frame (DepthPipelineParams::working_spacing): f / stride.
+      const float fx = static_cast<float> (intr.fx) / static_cast<float> (frame.prepared.stride);
+      const float fy = static_cast<float> (intr.fy) / static_cast<float> (frame.prepared.stride);
       BodyPartLabeling<pcl::PointXYZ> labeling;
       labeling.setInputCloud (frame.cloud);
       labeling.setIndices (std::make_shared<pcl::Indices> (frame.body));
       labeling.setForest (loaded.forest);
-      labeling.setFocalLength (static_cast<float> (intr.fx), static_cast<float> (intr.fy));
-      labeling.setStride (forestStrideFor (loaded.forest_stride, static_cast<float> (intr.fx)));
+      labeling.setFocalLength (fx, fy);
+      labeling.setStride (forestStrideFor (loaded.forest_stride, fx));
       pcl::PointCloud<BodyPartLabelPoint> labels;
       if (!labeling.compute (labels))
         throw std::runtime_error (id + ": labelling failed");
@@ -588,13 +591,19 @@ evaluatePartLabels (const DatasetSelection &selection, const LoadedDetector &loa
       {
         PartModeEstimation modes_estimation;
         PartModeParams mp;
-        mp.fx = static_cast<float> (intr.fx);
-        mp.fy = static_cast<float> (intr.fy);
+        mp.fx = fx;
+        mp.fy = fy;
         modes_estimation.setParams (mp);
         std::vector<PartMode> modes;
         modes_estimation.compute (labels, modes);
+        // Drawn on the frame the labels are pixels of; the labelled tips are the input's pixels.
+        std::vector<PartLabel> truth = selection.dataset.labelsOf (id);
+        const float scale = static_cast<float> (frame.prepared.stride), offset = static_cast<float> (frame.prepared.offset);
+        for (auto &l : truth)
+          l.tip_px = (l.tip_px - Eigen::Vector2f::Constant (offset)) / scale;
         writePng ((std::filesystem::path (overlay_dir) / (id + ".png")).string (),
-                  renderPartLabels (*selection.dataset.loadFrame (id), labels, modes, selection.dataset.labelsOf (id)));
+                  renderPartLabels (frame.prepared.frame ? *frame.prepared.frame : *selection.dataset.loadFrame (id), labels,
+                                    modes, truth));
       }
     }
     progress.step (i + 1);

@@ -111,8 +111,10 @@ collectForestTrainingFrames (const std::vector<std::string> &datasets, bool keyf
         f.cloud = labelled.cloud;
         f.body = std::move (labelled.body);
         f.classes = std::move (labelled.classes);
-        f.fx = static_cast<float> (selection.dataset.info ().intrinsics.fx);
-        f.fy = static_cast<float> (selection.dataset.info ().intrinsics.fy);
+        // The cloud is the working frame (DepthPipelineParams::working_spacing): f / stride.
+        const auto stride = static_cast<float> (labelled.prepared.stride);
+        f.fx = static_cast<float> (selection.dataset.info ().intrinsics.fx) / stride;
+        f.fy = static_cast<float> (selection.dataset.info ().intrinsics.fy) / stride;
         frames.push_back (std::move (f));
         ++used;
         exact += labelled.exact ? 1 : 0;

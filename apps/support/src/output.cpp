@@ -57,9 +57,20 @@ keypointsJson (const std::string &frame, const pcl::PointCloud<pcl::PointXYZ> &c
   doc["mesh_points"] = nlohmann::json::array ();
   for (const auto &mesh : result.meshes)
     doc["mesh_points"].push_back (mesh.indices.size ());
+  // Mesh points count working pixels (DepthPipelineParams::working_spacing); u and v are the input's.
+  doc["working_stride"] = result.stride;
   doc["interest_points"] = nlohmann::json::array ();
   for (const auto &p : result.interest_points)
-    doc["interest_points"].push_back (interestPointJson (p));
+  {
+    nlohmann::json point = interestPointJson (p);
+    if (result.stride > 1 && result.filtered)
+    {
+      const Eigen::Vector2i pixel = result.inputPixel (p.v * static_cast<int> (result.filtered->width) + p.u);
+      point["u"] = pixel.x ();
+      point["v"] = pixel.y ();
+    }
+    doc["interest_points"].push_back (point);
+  }
   doc["ms"] = nlohmann::json::object ();
   for (const auto &[stage, ms] : result.ms)
     doc["ms"][stage] = ms;

@@ -159,7 +159,10 @@ pipelineOptionsDescription (DepthPipelineParams &p, std::vector<std::string> &st
      "metres: narrower strands go, wider parts keep this much width (0: the plain erosion, which takes "
      "parts narrower than twice --spur-depth)")
     ("spur-min-connected", po::value (&p.spur_min_connected)->default_value (p.spur_min_connected),
-     "connected 8-neighbours a point needs to survive a pass");
+     "connected 8-neighbours a point needs to survive a pass")
+    ("working-spacing", floatValue (&p.working_spacing),
+     "metres between the samples the stages after person isolation work on: every s-th pixel, s by the "
+     "farthest person's depth and the focal length (0: every pixel)");
   return desc;
 }
 
@@ -178,7 +181,7 @@ pipelineFlagName (const std::string &key)
       {"spur_min_width", "spur-min-width"},     {"min_mesh_area", "min-mesh-area"},
       {"depth_step_growth", "depth-step-growth"},
       {"min_mesh_size", "min-mesh-size"},       {"k", "k"},
-      {"delta_orient", "delta-orient"}};
+      {"delta_orient", "delta-orient"}, {"working_spacing", "working-spacing"}};
   const auto it = flags.find (key);
   return it == flags.end () ? key : "--" + it->second;
 }

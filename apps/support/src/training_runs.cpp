@@ -46,9 +46,12 @@ collectTrainingExamples (const std::vector<std::string> &datasets, const Trainin
         pcl::PointCloud<BodyPartLabelPoint> part_labels;
         std::vector<PartMode> modes;
         const auto own = choice.dataset_forests.find (spec);
-        labelPersonParts (prepared, own != choice.dataset_forests.end () ? own->second : choice.forest, fx, fy,
-                          settings.forest_stride, part_labels, modes);
-        collectFusedTrainingSamples (prepared, part_labels, modes, fx, settings.pipeline.up, settings.fused, labels,
+        // The stages ran on the working frame (DepthPipelineParams::working_spacing).
+        const float working_fx = fx / static_cast<float> (prepared.stride);
+        const float working_fy = fy / static_cast<float> (prepared.stride);
+        labelPersonParts (prepared, own != choice.dataset_forests.end () ? own->second : choice.forest, working_fx,
+                          working_fy, settings.forest_stride, part_labels, modes);
+        collectFusedTrainingSamples (prepared, part_labels, modes, working_fx, settings.pipeline.up, settings.fused, labels,
                                      choice.radius, geometry, patches, auxiliary, classes);
         break;
       }

@@ -17,6 +17,7 @@
 
 #include <Eigen/Core>
 
+#include <cstdint>
 #include <functional>
 #include <string>
 #include <utility>
@@ -89,6 +90,13 @@ struct DepthPipelineParams
   /** Smallest mesh, square metres as the camera sees it (each point counts (z / f)^2, the
     * area its pixel covers at its depth); 0: none (models written before it). */
   float min_mesh_area = 0.003f;
+  /** Working density: after person isolation every stage runs on every s-th pixel of the
+    * frame in each direction, s = round (working_spacing f / z) at the farthest person's
+    * median depth z (1 to kMaxWorkingStride), so that each sample covers about
+    * working_spacing metres on the person whatever the sensor's resolution: a person near a
+    * 640x480 camera costs what one in a 320x240 frame does. 0: the sensor's density. */
+  float working_spacing = 0.f;
+  static constexpr int kMaxWorkingStride = 8;
   int k = 5;               ///< AGEX points per mesh, centroid included
   float delta_orient = 0.10f;
   bool naive = false;  ///< reference AGEX: a full Dijkstra per point (not stored in models)
@@ -139,9 +147,23 @@ struct DepthPipelineResult
   /** Stage name -> milliseconds, in order (crop, mixed_pixels, denoise, floor, spurs,
     * segmentation, agex, then total). */
   std::vector<std::pair<std::string, double>> ms;
+  /** The working density (DepthPipelineParams::working_spacing): every index above (persons,
+    * meshes, filtered, interest points' u and v) is a pixel of the working frame, which
+    * samples the input's pixel (stride u + offset, stride v + offset); frame is the working
+    * frame before cleaning (null with stride 1: the input is not kept alive), input_width and input_height
+    * the input's size, and focal_length is the working frame's. */
+  int stride = 1;
+  int offset = 0;
+  std::uint32_t input_width = 0, input_height = 0;
+  pcl::PointCloud<pcl::PointXYZ>::ConstPtr frame;
 
   /** The pixels of all meshes, in mesh order. */
   std::vector<int> meshIndices () const;
+  /** The input's pixel (column, row) a pixel of the working frame samples. */
+  Eigen::Vector2i inputPixel (int working_index) const;
+  /** The meshes as pixels of the input: each working pixel stands for the stride x stride
+    * block of input pixels around the one it samples (for overlays at the input's size). */
+  std::vector<pcl::PointIndices> meshesInInput () const;
 };
 
 /** \brief The depth stages composed as the detector runs them: frame -> people
@@ -215,6 +237,7 @@ private:
   agex::SurfaceSegmentation<pcl::PointXYZ> segmentation_;
   agex::AGEXKeypoint<pcl::PointXYZ, agex::InterestPoint> agex_;
   pcl::PointCloud<pcl::Label> person_labels_;
+  pcl::PointCloud<pcl::PointXYZ>::Ptr working_frame_;  ///< the sampled frame, reused once no result holds it
   pcl::IndicesPtr points_ {new pcl::Indices};  ///< the points kept so far, in increasing order
   pcl::PointCloud<pcl::PointXYZ>::Ptr filtered_;  ///< the result's frame, reused once no result holds it
   pcl::Indices filtered_points_;                   ///< the points of filtered_ that may be finite

@@ -33,7 +33,7 @@ struct WeakPartLabelParams
 struct PartLabelledFrame
 {
   std::string id;
-  pcl::PointCloud<pcl::PointXYZ>::Ptr cloud;  ///< what the forest reads
+  pcl::PointCloud<pcl::PointXYZ>::ConstPtr cloud;  ///< what the forest reads
   pcl::Indices body;
   std::vector<int> classes;  ///< per body pixel
   bool exact = false;        ///< from a part-label image

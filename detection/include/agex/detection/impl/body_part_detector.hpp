@@ -84,6 +84,15 @@ agex::BodyPartDetector<PointT>::compute (std::vector<BodyPartDetection> &detecti
   else
     classify (detections, settings_.kind == DetectorKind::SlidingWindow);
   assignPersons (detections);
+  // Found on the working frame: reported at the input's pixels.
+  if (intermediate_.stride > 1)
+    for (auto &d : detections)
+    {
+      const int width = static_cast<int> (intermediate_.filtered->width);
+      const Eigen::Vector2i pixel = intermediate_.inputPixel (d.v * width + d.u);
+      d.u = std::min (pixel.x (), static_cast<int> (intermediate_.input_width) - 1);
+      d.v = std::min (pixel.y (), static_cast<int> (intermediate_.input_height) - 1);
+    }
   for (std::size_t i = first_later_stage; i < intermediate_.ms.size (); ++i)
     total += intermediate_.ms[i].second;
   intermediate_.ms.emplace_back ("total", total);
@@ -138,7 +147,8 @@ agex::BodyPartDetector<PointT>::labelParts ()
 {
   const auto start = std::chrono::steady_clock::now ();
   const DepthPipelineResult &prepared = intermediate_;
-  float fx = fx_, fy = fy_;
+  // The focal lengths given are the input's; the stages ran on the working frame.
+  float fx = fx_ / static_cast<float> (prepared.stride), fy = fy_ / static_cast<float> (prepared.stride);
   if ((!(fx > 0.f) || !(fy > 0.f)) && prepared.filtered)
     fx = fy = DepthPatchEstimation<pcl::PointXYZ, DepthPatch>::estimateFocalLength (*prepared.filtered);
   used_fx_ = fx;
@@ -151,7 +161,9 @@ agex::BodyPartDetector<PointT>::labelParts ()
   if (mode_ == DetectorMode::Forest)
   {
     pcl::PointCloud<pcl::PointXYZ>::ConstPtr frame;
-    if constexpr (std::is_same<PointT, pcl::PointXYZ>::value)
+    if (prepared.stride > 1)
+      frame = prepared.frame;  // the working frame, the persons' pixels are its
+    else if constexpr (std::is_same<PointT, pcl::PointXYZ>::value)
       frame = input_;
     else if (input_)
     {

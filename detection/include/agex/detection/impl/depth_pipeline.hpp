@@ -87,6 +87,36 @@ metricMedianSpacing (float extent, float f, float z)
   return clampedInt (std::round ((pixels - 1.0) / 2.0), 1, DepthMedianFilter<pcl::PointXYZ>::kMaxSpacing);
 }
 
+/** The working stride (DepthPipelineParams::working_spacing): samples spacing metres apart
+  * at depth z with focal length f; 1 when that is under 1.5 pixels or the depth unknown. */
+inline int
+workingStride (float spacing, float f, float z)
+{
+  const double pixels = static_cast<double> (spacing) * f / z;
+  if (!(pixels >= 1.5))  // NaN depth too
+    return 1;
+  return clampedInt (std::round (pixels), 1, DepthPipelineParams::kMaxWorkingStride);
+}
+
+/** Every stride-th pixel of frame from offset on, in both directions, as an organized cloud. */
+inline void
+sampleFrame (const pcl::PointCloud<pcl::PointXYZ> &frame, int stride, int offset, pcl::PointCloud<pcl::PointXYZ> &out)
+{
+  const int width = static_cast<int> (frame.width), height = static_cast<int> (frame.height);
+  const int w = (width - 1 - offset) / stride + 1, h = (height - 1 - offset) / stride + 1;
+  out.header = frame.header;
+  out.sensor_origin_ = frame.sensor_origin_;
+  out.sensor_orientation_ = frame.sensor_orientation_;
+  out.points.resize (static_cast<std::size_t> (w) * h);
+  out.width = static_cast<std::uint32_t> (w);
+  out.height = static_cast<std::uint32_t> (h);
+  out.is_dense = false;
+  for (int v = 0; v < h; ++v)
+    for (int u = 0; u < w; ++u)
+      out[static_cast<std::size_t> (v) * w + u] =
+          frame[static_cast<std::size_t> (stride * v + offset) * width + stride * u + offset];
+}
+
 /** The points of sorted that are not in removed, a sorted subsequence of it. */
 inline void
 removeSortedSubset (pcl::Indices &sorted, const pcl::Indices &removed)
@@ -186,8 +216,10 @@ agex::DepthPipeline<PointT>::compute (DepthPipelineResult &result)
   result = DepthPipelineResult ();  // lets go of the last frame's buffer, if result held it
   const DepthPipelineParams &params = params_;
   auto start = Clock::now ();
-  const pcl::PointCloud<pcl::PointXYZ>::ConstPtr frame = xyzFrame ();
+  pcl::PointCloud<pcl::PointXYZ>::ConstPtr frame = xyzFrame ();
   const bool organized = frame->isOrganized () && !frame->empty ();
+  result.input_width = frame->width;
+  result.input_height = frame->height;
 
   // 1. Which points we keep: the people's pixels, within the crop box if there is one.
   // points_ holds them from here on, in increasing order: every later stage works on them
@@ -240,10 +272,71 @@ agex::DepthPipeline<PointT>::compute (DepthPipelineResult &result)
   // The focal length, for the settings given in metres (or as an angle) rather than pixels.
   const bool spur_metric = params.spur_min_width > 0.f;
   const bool needs_focal = params.median_window < 0 || (params.remove_mixed_pixels && params.mixed_window_radius < 0) ||
-                           (spur_metric && params.spur_iterations != 0) || params.min_mesh_area > 0.f;
-  const float focal = organized && needs_focal ? focalLength (*frame, params.isolate_people) : 0.f;
-  result.focal_length = focal;
+                           (spur_metric && params.spur_iterations != 0) || params.min_mesh_area > 0.f ||
+                           params.working_spacing > 0.f;
+  float focal = organized && needs_focal ? focalLength (*frame, params.isolate_people) : 0.f;
   result.ms.emplace_back ("crop", msSince (start));
+
+  // 1b. The working density: the farthest person decides, so that no one is sampled more
+  // coarsely than working_spacing; people nearer than that are sampled finer.
+  start = Clock::now ();
+  if (params.working_spacing > 0.f && organized && focal > 0.f && !inside->empty ())
+  {
+    float z = 0.f;
+    for (const auto &info : result.person_info)
+      if (std::isfinite (info.distance))
+        z = std::max (z, info.distance);
+    if (!(z > 0.f))
+      z = detail::medianDepth (*frame, *inside);
+    const int stride = std::min ({detail::workingStride (params.working_spacing, focal, z),
+                                  static_cast<int> (frame->width), static_cast<int> (frame->height)});
+    if (stride > 1)
+    {
+      const int offset = (stride - 1) / 2;
+      if (!working_frame_ || working_frame_.use_count () > 1)
+        working_frame_.reset (new pcl::PointCloud<pcl::PointXYZ>);
+      detail::sampleFrame (*frame, stride, offset, *working_frame_);
+      const int width = static_cast<int> (frame->width);
+      const int w = static_cast<int> (working_frame_->width), h = static_cast<int> (working_frame_->height);
+      const auto source = [&] (int u, int v) {
+        return static_cast<std::size_t> (stride * v + offset) * width + stride * u + offset;
+      };
+      // The kept points and the persons, as working pixels (still in increasing order).
+      pcl::IndicesPtr sampled (new pcl::Indices);
+      for (const auto i : *inside)
+      {
+        const int u = i % width - offset, v = i / width - offset;
+        if (u >= 0 && v >= 0 && u % stride == 0 && v % stride == 0)
+          sampled->push_back (v / stride * w + u / stride);
+      }
+      inside = sampled;
+      if (!result.persons.empty ())
+      {
+        pcl::PointCloud<pcl::Label> labels;
+        labels.points.resize (working_frame_->size ());
+        labels.width = working_frame_->width;
+        labels.height = working_frame_->height;
+        for (auto &person : result.persons)
+          person.indices.clear ();
+        for (int v = 0; v < h; ++v)
+          for (int u = 0; u < w; ++u)
+          {
+            const std::uint32_t label = person_labels_[source (u, v)].label;
+            labels[static_cast<std::size_t> (v) * w + u].label = label;
+            if (label < result.persons.size ())
+              result.persons[label].indices.push_back (v * w + u);
+          }
+        person_labels_.swap (labels);
+      }
+      result.stride = stride;
+      result.offset = offset;
+      frame = working_frame_;
+      result.frame = working_frame_;
+      focal /= static_cast<float> (stride);
+    }
+  }
+  result.focal_length = focal;
+  result.ms.emplace_back ("working_density", msSince (start));
 
   // 2. Mixed pixels among the kept points, judged against neighbours from the whole
   // frame: outside the box the far side of a silhouette is still there to be seen. The

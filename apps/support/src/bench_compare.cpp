@@ -25,11 +25,42 @@ namespace apps
 {
 namespace
 {
+/** This process's environment with BUILD/lib first on LD_LIBRARY_PATH, for program
+  * BUILD/bin/NAME when BUILD/lib exists: a copied build tree (cp -a build /tmp/before) keeps
+  * the RUNPATH of the tree it was built in, and would load that tree's libraries. */
+std::vector<std::string>
+environmentFor (const std::string &program)
+{
+  std::vector<std::string> env;
+  const char *old_path = nullptr;
+  for (char **e = environ; e && *e; ++e)
+  {
+    if (std::strncmp (*e, "LD_LIBRARY_PATH=", 16) == 0)
+      old_path = *e + 16;
+    else
+      env.emplace_back (*e);
+  }
+  const std::string bin = program.substr (0, program.find_last_of ('/') == std::string::npos ? 0 : program.find_last_of ('/'));
+  const std::string lib = (bin.empty () ? std::string (".") : bin) + "/../lib";
+  struct stat st;
+  std::string path = stat (lib.c_str (), &st) == 0 && S_ISDIR (st.st_mode) ? lib : std::string ();
+  if (old_path && *old_path)
+    path += (path.empty () ? "" : ":") + std::string (old_path);
+  if (!path.empty ())
+    env.push_back ("LD_LIBRARY_PATH=" + path);
+  return env;
+}
+
 /** Runs program with arguments, its output to log. \return "" when it exited with 0, else what
   * went wrong (its exit status, the signal that ended it, or why it could not start). */
 std::string
 runProgram (const std::string &program, const std::vector<std::string> &arguments, const std::string &log)
 {
+  std::vector<std::string> environment = environmentFor (program);
+  std::vector<char *> envp;
+  for (auto &e : environment)
+    envp.push_back (e.data ());
+  envp.push_back (nullptr);
   std::vector<char *> argv;
   argv.push_back (const_cast<char *> (program.c_str ()));
   for (const auto &a : arguments)
@@ -44,7 +75,7 @@ runProgram (const std::string &program, const std::vector<std::string> &argument
     spawned = posix_spawn_file_actions_adddup2 (&actions, STDOUT_FILENO, STDERR_FILENO);
   pid_t pid = 0;
   if (spawned == 0)
-    spawned = posix_spawn (&pid, program.c_str (), &actions, nullptr, argv.data (), environ);
+    spawned = posix_spawn (&pid, program.c_str (), &actions, nullptr, argv.data (), envp.data ());
   posix_spawn_file_actions_destroy (&actions);
   if (spawned != 0)
     return std::string ("could not start: ") + std::strerror (spawned);

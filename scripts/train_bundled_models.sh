@@ -8,10 +8,9 @@
 #   mixed (the default; the bundled fused detector, its forest and the sliding window):
 #     scripts/train_mixed_models.sh, the synthetic people and the real Bonn frames of all 8
 #     sequences as recorded and re-projected to 0.8-5 m. On 2 cores: the datasets 14 min, the
-#     forest 9, the four cross-fitting forests 18, then the detectors side by side (fused 31
-#     min, sliding window 44): about 1 h 25 min. The AGEX-only model trains beside them and was
-#     stopped unfinished the one time, so the bundled agex_bonn_agex.yml is still the bonn
-#     recipe's and its time on the mix is not known;
+#     forest 9, the four cross-fitting forests 18, then the three detectors side by side (fused
+#     31 min, sliding window 44, the AGEX-only model 43 min measured beside two other training
+#     runs): about 1 h 30 min;
 #   bonn: the earlier recipe, both views of the 8 Bonn sequences as recorded; about half an
 #     hour on 2 cores.
 # Usage: scripts/train_bundled_models.sh [BUILD_DIR] [WORK_DIR]

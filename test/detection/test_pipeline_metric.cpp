@@ -536,9 +536,7 @@ TEST (MetricSettings, BundledModelsRunMetricSettings)
   // The bundled models are trained on several resolutions and distances
   // (scripts/train_bundled_models.sh): every window, width and size is metric or follows the
   // focal length, and the floor may tilt as a camera looking down tilts it.
-  // The AGEX-only baseline agex_bonn_agex.yml is still the Bonn-trained one, on pixel settings
-  // (doc/results.md, "The bundled models").
-  for (const char *name : {"agex_bonn.yml", "agex_bonn_sw.yml"})
+  for (const char *name : {"agex_bonn.yml", "agex_bonn_sw.yml", "agex_bonn_agex.yml"})
   {
     SCOPED_TRACE (name);
     const std::string path = std::string (AGEX_SOURCE_DIR) + "/data/models/" + name;

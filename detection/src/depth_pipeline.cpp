@@ -233,6 +233,16 @@ DepthPipelineResult::inputPixel (int working_index) const
   return Eigen::Vector2i (stride * (working_index % width) + offset, stride * (working_index / width) + offset);
 }
 
+int
+DepthPipelineResult::workingIndex (int u, int v) const
+{
+  if (!filtered || u < 0 || v < 0 || stride < 1)
+    return -1;
+  const int wu = u / stride, wv = v / stride;
+  const int width = static_cast<int> (filtered->width), height = static_cast<int> (filtered->height);
+  return wu < width && wv < height ? wv * width + wu : -1;
+}
+
 std::vector<pcl::PointIndices>
 DepthPipelineResult::meshesInInput () const
 {

@@ -173,6 +173,35 @@ interestPointDict (const agex::InterestPoint &p)
   return d;
 }
 
+/** The point with its pixel at the input's resolution (DepthPipelineParams::working_spacing). */
+agex::InterestPoint
+atInputPixel (agex::InterestPoint p, const agex::DepthPipelineResult &r)
+{
+  if (r.stride > 1 && r.filtered)
+  {
+    const Eigen::Vector2i pixel = r.inputPixel (p.v * static_cast<int> (r.filtered->width) + p.u);
+    p.u = pixel.x ();
+    p.v = pixel.y ();
+  }
+  return p;
+}
+
+/** An h x w array (the input's size) of a value per working pixel of r, fill where none. */
+template <typename T, typename F>
+py::array_t<T>
+inputImage (const agex::DepthPipelineResult &r, py::ssize_t h, py::ssize_t w, T fill, F value)
+{
+  py::array_t<T> image ({h, w});
+  T *out = image.mutable_data ();
+  for (py::ssize_t v = 0; v < h; ++v)
+    for (py::ssize_t u = 0; u < w; ++u)
+    {
+      const int i = r.workingIndex (static_cast<int> (u), static_cast<int> (v));
+      out[v * w + u] = i < 0 ? fill : value (i);
+    }
+  return image;
+}
+
 /** An H x W array of one float field of an organized cloud (a copy). */
 template <typename PointT, typename F>
 py::array_t<float>
@@ -465,39 +494,45 @@ public:
     const py::ssize_t h = input ? input->height : 0, w = input ? input->width : 0;
     py::dict d;
     const float nan = std::numeric_limits<float>::quiet_NaN ();
-    if (r.filtered && static_cast<py::ssize_t> (r.filtered->width) == w && static_cast<py::ssize_t> (r.filtered->height) == h)
-      d["filtered_depth"] = fieldImage (*r.filtered, [] (const pcl::PointXYZ &p) { return p.z; });
+    // Every image at the input's size: with a working density each working pixel fills its
+    // stride x stride block (DepthPipelineResult::workingIndex).
+    if (r.filtered && r.filtered->isOrganized ())
+      d["filtered_depth"] = inputImage<float> (r, h, w, nan, [&r] (int i) { return (*r.filtered)[static_cast<std::size_t> (i)].z; });
     else
     {
       py::array_t<float> empty ({h, w});
       std::fill (empty.mutable_data (), empty.mutable_data () + h * w, nan);
       d["filtered_depth"] = empty;
     }
-    py::array_t<std::int32_t> meshes ({h, w});
-    std::fill (meshes.mutable_data (), meshes.mutable_data () + h * w, -1);
+    std::vector<std::int32_t> mesh_of (r.filtered ? r.filtered->size () : 0, -1);
     for (std::size_t m = 0; m < r.meshes.size (); ++m)
       for (const int index : r.meshes[m].indices)
-        if (index >= 0 && index < h * w)
-          meshes.mutable_data ()[index] = static_cast<std::int32_t> (m);
-    d["mesh_ids"] = meshes;
+        if (index >= 0 && static_cast<std::size_t> (index) < mesh_of.size ())
+          mesh_of[static_cast<std::size_t> (index)] = static_cast<std::int32_t> (m);
+    d["mesh_ids"] = inputImage<std::int32_t> (r, h, w, -1, [&mesh_of] (int i) { return mesh_of[static_cast<std::size_t> (i)]; });
     const auto &labels = detector.getPartLabels ();
     py::array_t<std::int32_t> parts ({h, w});
     std::fill (parts.mutable_data (), parts.mutable_data () + h * w, -1);
     py::array_t<float> probabilities ({h, w, py::ssize_t (4)});
     std::fill (probabilities.mutable_data (), probabilities.mutable_data () + h * w * 4, nan);
-    if (static_cast<py::ssize_t> (labels.width) == w && static_cast<py::ssize_t> (labels.height) == h)
-      for (py::ssize_t i = 0; i < h * w; ++i)
-      {
-        const auto &l = labels[static_cast<std::size_t> (i)];
-        parts.mutable_data ()[i] = l.label;
-        for (int p = 0; p < 4; ++p)
-          probabilities.mutable_data ()[i * 4 + p] = l.probability (p);
-      }
+    if (r.filtered && labels.width == r.filtered->width && labels.height == r.filtered->height)
+      for (py::ssize_t v = 0; v < h; ++v)
+        for (py::ssize_t u = 0; u < w; ++u)
+        {
+          const int j = r.workingIndex (static_cast<int> (u), static_cast<int> (v));
+          if (j < 0)
+            continue;
+          const auto &l = labels[static_cast<std::size_t> (j)];
+          const py::ssize_t i = v * w + u;
+          parts.mutable_data ()[i] = l.label;
+          for (int p = 0; p < 4; ++p)
+            probabilities.mutable_data ()[i * 4 + p] = l.probability (p);
+        }
     d["part_labels"] = parts;
     d["part_probabilities"] = probabilities;
     py::list points;
     for (const auto &p : r.interest_points)
-      points.append (interestPointDict (p));
+      points.append (interestPointDict (atInputPixel (p, r)));
     d["interest_points"] = points;
     py::list modes;
     for (const auto &m : detector.getPartModes ())
@@ -582,21 +617,23 @@ agexKeypoints (const py::object &depth, std::optional<double> fx, std::optional<
   }
   py::list points;
   for (const auto &p : result.interest_points)
-    points.append (interestPointDict (p));
+    points.append (interestPointDict (atInputPixel (p, result)));
   if (!return_intermediate)
     return std::move (points);
   py::dict d;
   const Cloud &input = *frame->frame.cloud;
   const py::ssize_t h = input.height, w = input.width;
-  py::array_t<std::int32_t> meshes ({h, w});
-  std::fill (meshes.mutable_data (), meshes.mutable_data () + h * w, -1);
+  // At the input's size, as intermediate () gives them (a working pixel fills its block).
+  std::vector<std::int32_t> mesh_of (result.filtered ? result.filtered->size () : 0, -1);
   for (std::size_t m = 0; m < result.meshes.size (); ++m)
     for (const int index : result.meshes[m].indices)
-      if (index >= 0 && index < h * w)
-        meshes.mutable_data ()[index] = static_cast<std::int32_t> (m);
-  d["filtered_depth"] = result.filtered ? py::object (fieldImage (*result.filtered, [] (const pcl::PointXYZ &p) { return p.z; }))
-                                        : py::object (py::none ());
-  d["mesh_ids"] = meshes;
+      if (index >= 0 && static_cast<std::size_t> (index) < mesh_of.size ())
+        mesh_of[static_cast<std::size_t> (index)] = static_cast<std::int32_t> (m);
+  d["filtered_depth"] =
+      result.filtered ? py::object (inputImage<float> (result, h, w, std::numeric_limits<float>::quiet_NaN (),
+                                                       [&result] (int i) { return (*result.filtered)[static_cast<std::size_t> (i)].z; }))
+                      : py::object (py::none ());
+  d["mesh_ids"] = inputImage<std::int32_t> (result, h, w, -1, [&mesh_of] (int i) { return mesh_of[static_cast<std::size_t> (i)]; });
   py::dict ms;
   for (const auto &[stage, value] : result.ms)
     ms[py::str (stage)] = value;

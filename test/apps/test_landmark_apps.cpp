@@ -11,6 +11,7 @@
 #include "test_support.h"
 
 #include <gtest/gtest.h>
+
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -18,6 +19,8 @@
 
 #include <algorithm>
 #include <cstdlib>
+#include <fstream>
+#include <iterator>
 #include <map>
 #include <sstream>
 
@@ -147,6 +150,17 @@ TEST (LandmarkApps, AnnotateRgbdFrame)
       EXPECT_LT (box.parts.at ("000").y, box.parts.at ("108").y);
     }
   EXPECT_EQ (people, 5);  // the five people walking away
+  // A working density would draw the masks on a coarser grid than the colour image: refused,
+  // and the dataset written above stays.
+  const std::string err = (dir / "err.txt").string ();
+  EXPECT_NE (std::system ((std::string (AGEX_ANNOTATE_EXECUTABLE) + " rgbd " + pcd + " --out " + xml +
+                           " --working-spacing 0.01 > /dev/null 2> " + err)
+                              .c_str ()),
+             0);
+  std::ifstream in (err);
+  const std::string message ((std::istreambuf_iterator<char> (in)), std::istreambuf_iterator<char> ());
+  EXPECT_NE (message.find ("--working-spacing is not for annotation"), std::string::npos) << message;
+  EXPECT_EQ (agex::readImglabDataset (xml).images.size (), 1u);
   fs::remove_all (dir);
 }
 

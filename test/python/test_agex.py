@@ -299,6 +299,28 @@ def test_agex_keypoints_as_the_app_gives_them(tmp_path):
     assert any(p["position"][0] < 0.0 for p in agex.agex_keypoints(agex.load_frame(FRAME)))
 
 
+def test_a_working_density_gives_the_inputs_pixels_and_images(tmp_path):
+    # agex_keypoints at a working spacing of 1 cm (every second pixel of the bundled 640x480
+    # frame): the same points as the app, their pixels the input's (where the camera sees
+    # them), and the images at the input's size, each working pixel filling its block.
+    expected = app_document("agex_keypoints", FRAME, "--working-spacing", "0.01", tmp_path=tmp_path)
+    assert expected["working_stride"] == 2
+    points, seen = agex.agex_keypoints(agex.load_frame(FRAME), working_spacing=0.01, return_intermediate=True)
+    assert len(points) == len(expected["interest_points"]) > 0
+    for p, q in zip(points, expected["interest_points"]):
+        assert p["pixel"] == (q["u"], q["v"])
+        x, y, z = p["position"]
+        assert abs(KINECT["fx"] * x / z + KINECT["cx"] - p["pixel"][0]) <= 1.0
+        assert abs(KINECT["fy"] * y / z + KINECT["cy"] - p["pixel"][1]) <= 1.0
+    meshes = seen["mesh_ids"]
+    assert meshes.shape == (480, 640) and seen["filtered_depth"].shape == (480, 640)
+    for p in points:
+        u, v = p["pixel"]
+        assert meshes[v, u] == p["mesh"]
+    # Blocks of 2x2: each row pair and column pair repeats.
+    np.testing.assert_array_equal(meshes[0::2, 0::2], meshes[1::2, 1::2])
+
+
 def test_a_thread_pool_gives_what_a_serial_loop_gives(grey):
     # Eight different frames: the bundled one shifted and mirrored.
     frames = [np.roll(grey, shift, axis=1) for shift in (-60, -30, 0, 30, 60)]

@@ -121,7 +121,8 @@ struct Tally
         ++h.second;
         if (&variant == &all.front ())
         {
-          person[tip.part].first += near (*cloud, people, tip.point);
+          // The persons are pixels of the frame the stages ran on (the working frame, if any).
+          person[tip.part].first += near (r.frame ? *r.frame : *cloud, people, tip.point);
           ++person[tip.part].second;
         }
       }

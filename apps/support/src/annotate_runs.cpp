@@ -245,6 +245,10 @@ annotateRgbd (int argc, char **argv)
   if (inputs.empty ())
     throw std::runtime_error ("no INPUT cloud given (see --help)");
   finishPipelineOptions (vector_flags, params);
+  // The masks are drawn on the colour image's own pixels.
+  if (params.working_spacing > 0.f)
+    throw std::runtime_error ("--working-spacing is not for annotation: the masks are drawn at every pixel of the "
+                              "colour image (leave it at 0)");
   selection.min_height_px = output.min_height;
   InputFiles read (inputs);
   read.checkOutput (output.out);

@@ -144,8 +144,8 @@ struct DepthPipelineResult
   float focal_length = 0.f;
   int median_window = 0;
   int mixed_window_radius = 0;
-  /** Stage name -> milliseconds, in order (crop, mixed_pixels, denoise, floor, spurs,
-    * segmentation, agex, then total). */
+  /** Stage name -> milliseconds, in order (people, crop, working_density, mixed_pixels,
+    * denoise, floor, spurs, segmentation, agex, then total). */
   std::vector<std::pair<std::string, double>> ms;
   /** The working density (DepthPipelineParams::working_spacing): every index above (persons,
     * meshes, filtered, interest points' u and v) is a pixel of the working frame, which
@@ -161,6 +161,9 @@ struct DepthPipelineResult
   std::vector<int> meshIndices () const;
   /** The input's pixel (column, row) a pixel of the working frame samples. */
   Eigen::Vector2i inputPixel (int working_index) const;
+  /** The working pixel whose stride x stride block holds the input's pixel (u, v) (the block
+    * meshesInInput gives it); -1 outside the working frame. */
+  int workingIndex (int u, int v) const;
   /** The meshes as pixels of the input: each working pixel stands for the stride x stride
     * block of input pixels around the one it samples (for overlays at the input's size). */
   std::vector<pcl::PointIndices> meshesInInput () const;
@@ -238,6 +241,7 @@ private:
   agex::AGEXKeypoint<pcl::PointXYZ, agex::InterestPoint> agex_;
   pcl::PointCloud<pcl::Label> person_labels_;
   pcl::PointCloud<pcl::PointXYZ>::Ptr working_frame_;  ///< the sampled frame, reused once no result holds it
+  pcl::PointCloud<pcl::Label> working_labels_;         ///< person_labels_ at the working pixels
   pcl::IndicesPtr points_ {new pcl::Indices};  ///< the points kept so far, in increasing order
   pcl::PointCloud<pcl::PointXYZ>::Ptr filtered_;  ///< the result's frame, reused once no result holds it
   pcl::Indices filtered_points_;                   ///< the points of filtered_ that may be finite

@@ -280,6 +280,7 @@ agex::DepthPipeline<PointT>::compute (DepthPipelineResult &result)
   // 1b. The working density: the farthest person decides, so that no one is sampled more
   // coarsely than working_spacing; people nearer than that are sampled finer.
   start = Clock::now ();
+  const pcl::PointCloud<pcl::Label> *labels_in_use = &person_labels_;
   if (params.working_spacing > 0.f && organized && focal > 0.f && !inside->empty ())
   {
     float z = 0.f;
@@ -288,8 +289,9 @@ agex::DepthPipeline<PointT>::compute (DepthPipelineResult &result)
         z = std::max (z, info.distance);
     if (!(z > 0.f))
       z = detail::medianDepth (*frame, *inside);
+    // At least two rows and columns: the organized stages need neighbours.
     const int stride = std::min ({detail::workingStride (params.working_spacing, focal, z),
-                                  static_cast<int> (frame->width), static_cast<int> (frame->height)});
+                                  static_cast<int> (frame->width) / 2, static_cast<int> (frame->height) / 2});
     if (stride > 1)
     {
       const int offset = (stride - 1) / 2;
@@ -312,7 +314,8 @@ agex::DepthPipeline<PointT>::compute (DepthPipelineResult &result)
       inside = sampled;
       if (!result.persons.empty ())
       {
-        pcl::PointCloud<pcl::Label> labels;
+        // A buffer of its own: person_labels_ keeps the input's size for the next frame.
+        pcl::PointCloud<pcl::Label> &labels = working_labels_;
         labels.points.resize (working_frame_->size ());
         labels.width = working_frame_->width;
         labels.height = working_frame_->height;
@@ -326,7 +329,7 @@ agex::DepthPipeline<PointT>::compute (DepthPipelineResult &result)
             if (label < result.persons.size ())
               result.persons[label].indices.push_back (v * w + u);
           }
-        person_labels_.swap (labels);
+        labels_in_use = &working_labels_;
       }
       result.stride = stride;
       result.offset = offset;
@@ -491,7 +494,7 @@ agex::DepthPipeline<PointT>::compute (DepthPipelineResult &result)
     agex.compute (result.interest_points);
   }
   result.ms.emplace_back ("agex", msSince (start));
-  result.mesh_person = params.isolate_people && organized ? agex::personOfMeshes (person_labels_, result.meshes)
+  result.mesh_person = params.isolate_people && organized ? agex::personOfMeshes (*labels_in_use, result.meshes)
                                                           : std::vector<int> (result.meshes.size (), -1);
 
   double total = 0.0;

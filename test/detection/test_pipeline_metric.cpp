@@ -137,6 +137,29 @@ expectSameMeshes (const std::vector<MeshSummary> &a, const std::vector<MeshSumma
   }
 }
 
+/** Scene index of people in procedural poses (no shared data needed) in a room with clutter,
+  * the camera aimed at them from 1.5-3.5 m, rendered by a noise-free Kinect (the
+  * quantisation stays) at width x height (f = 525 at 640x480). */
+Cloud::Ptr
+noiseFreeKinectScene (std::uint64_t index, int width, int height)
+{
+  static const agex::SynthGenerator generator = [] {
+    agex::SynthOptions options;
+    options.procedural_poses = 40;
+    options.sensor = agex::SynthSensor::Kinect;
+    options.seed = 21;
+    return agex::SynthGenerator (options);
+  }();
+  agex::SensorModel exact = agex::renderSensorModel (agex::SynthSensor::Kinect);
+  exact.kinect_sigma_q = 0.0;
+  exact.kinect_edge_drop = exact.kinect_edge_drop_near = 0.0;
+  const agex::SynthFrame frame = generator.render (index);
+  agex::SynthRng rng (1);
+  agex::SynthFrame view;
+  agex::renderScene (frame.scene, agex::scaledTo (exact, width, height), rng, view);
+  return Cloud::Ptr (new Cloud (view.cloud));
+}
+
 /** Whether a mesh point lies within radius of p. */
 bool
 meshPointNear (const PipelineResult &result, const Eigen::Vector3f &p, float radius)
@@ -187,34 +210,18 @@ TEST (MetricPipeline, AFigureGivesTheSameMeshesAt640x480And320x240AndOnA512x424C
 
 TEST (MetricPipeline, SynthesisedPeopleGiveTheSamePersonsAndLargestMeshesAtBothResolutions)
 {
-  // People in procedural poses (no shared data needed) in a room with clutter, the camera
-  // aimed at them from 1.5-3.5 m, each scene rendered by the same noise-free Kinect at
-  // 640x480 and at 320x240 (half the focal length); the default pipeline, person isolation
-  // included. What must agree: the persons, each person's cleaned area, and its largest
+  // Each scene of noiseFreeKinectScene at 640x480 and at 320x240 (half the focal length); the
+  // default pipeline, person isolation included. What must agree: the persons, each person's cleaned area, and its largest
   // mesh. (The small meshes do not always agree: a piece cut off by a depth step or by the
   // erosion of the part it grows from comes apart at one resolution and not at the other,
   // or lies just above the minimum area at one of them.)
-  agex::SynthOptions options;
-  options.procedural_poses = 40;
-  options.sensor = agex::SynthSensor::Kinect;
-  options.seed = 21;
-  const agex::SynthGenerator generator (options);
-  agex::SensorModel exact = agex::renderSensorModel (agex::SynthSensor::Kinect);
-  exact.kinect_sigma_q = 0.0;  // no disparity noise (the quantisation stays)
-  exact.kinect_edge_drop = exact.kinect_edge_drop_near = 0.0;
   int persons = 0;
   for (std::uint64_t index = 0; index < 6; ++index)
   {
-    const agex::SynthFrame frame = generator.render (index);
     SCOPED_TRACE ("frame " + std::to_string (index));
     PipelineResult results[2];
     for (int k = 0; k < 2; ++k)
-    {
-      agex::SynthRng rng (1);
-      agex::SynthFrame view;
-      agex::renderScene (frame.scene, agex::scaledTo (exact, 640 / (k + 1), 480 / (k + 1)), rng, view);
-      results[k] = agex::runDepthPipeline (Cloud::Ptr (new Cloud (view.cloud)), PipelineParams ());
-    }
+      results[k] = agex::runDepthPipeline (noiseFreeKinectScene (index, 640 / (k + 1), 480 / (k + 1)), PipelineParams ());
     const auto a = summarise (results[0]), b = summarise (results[1]);
     SCOPED_TRACE ("640x480:" + describe (a) + "\n320x240:" + describe (b));
     ASSERT_EQ (results[0].persons.size (), results[1].persons.size ());
@@ -243,25 +250,13 @@ TEST (MetricPipeline, AWorkingDensityGivesTheSamePersonsAndMeshesFromEveryFewPix
   // sensor's density and at a working spacing of 1 cm (every second to fourth pixel, by the
   // farthest person's depth): the same persons, each person's area within 15%; the interest
   // points and meshes name pixels of the working frame, which map back to the input's.
-  agex::SynthOptions options;
-  options.procedural_poses = 40;
-  options.sensor = agex::SynthSensor::Kinect;
-  options.seed = 21;
-  const agex::SynthGenerator generator (options);
-  agex::SensorModel exact = agex::renderSensorModel (agex::SynthSensor::Kinect);
-  exact.kinect_sigma_q = 0.0;
-  exact.kinect_edge_drop = exact.kinect_edge_drop_near = 0.0;
   PipelineParams working;
   working.working_spacing = 0.01f;
   int persons = 0, sampled = 0;
   for (std::uint64_t index = 0; index < 6; ++index)
   {
-    const agex::SynthFrame frame = generator.render (index);
     SCOPED_TRACE ("frame " + std::to_string (index));
-    agex::SynthRng rng (1);
-    agex::SynthFrame view;
-    agex::renderScene (frame.scene, agex::scaledTo (exact, 640, 480), rng, view);
-    const Cloud::Ptr cloud (new Cloud (view.cloud));
+    const Cloud::Ptr cloud = noiseFreeKinectScene (index, 640, 480);
     const PipelineResult full = agex::runDepthPipeline (cloud, PipelineParams ());
     const PipelineResult work = agex::runDepthPipeline (cloud, working);
     EXPECT_EQ (full.stride, 1);

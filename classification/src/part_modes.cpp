@@ -10,6 +10,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <map>
 #include <unordered_map>
 
@@ -115,6 +117,127 @@ private:
   float cell_;
   std::unordered_map<std::int64_t, int> ids_;
   std::vector<std::vector<int>> cells_;
+};
+
+/** 2^t for t in [-126, 0]: Cephes' exp2f polynomial on [-0.5, 0.5] (relative error below
+  * 2e-7), inline and branch-free so the kernel loop below vectorises, which a call to
+  * std::exp does not. */
+inline float
+exp2NonPositive (float t)
+{
+  const int n = static_cast<int> (t - 0.5f);  // rounds to nearest: truncation of t - 0.5 <= 0
+  const float f = t - static_cast<float> (n);
+  float p = 1.535336188319500e-4f;
+  p = p * f + 1.339887440266574e-3f;
+  p = p * f + 9.618437357674640e-3f;
+  p = p * f + 5.550332471162809e-2f;
+  p = p * f + 2.402264791363012e-1f;
+  p = p * f + 6.931472028550421e-1f;
+  p = p * f + 1.f;
+  const std::int32_t bits = (n + 127) * (1 << 23);
+  float scale;
+  std::memcpy (&scale, &bits, sizeof scale);
+  return p * scale;
+}
+
+/** Sum of n floats in eight interleaved lanes (a fixed order, so deterministic), which the
+  * compiler vectorises; a plain float sum it may not reorder. */
+float
+laneSum (const float *a, std::size_t n)
+{
+  constexpr std::size_t kLanes = 8;
+  float lanes[kLanes] = {};
+  std::size_t i = 0;
+  for (; i + kLanes <= n; i += kLanes)
+    for (std::size_t l = 0; l < kLanes; ++l)
+      lanes[l] += a[i + l];
+  for (std::size_t l = 0; i < n; ++i, ++l)
+    lanes[l] += a[i];
+  return ((lanes[0] + lanes[1]) + (lanes[2] + lanes[3])) + ((lanes[4] + lanes[5]) + (lanes[6] + lanes[7]));
+}
+
+/** Per atom i: its kernel weight k = w exp (-d^2 / b^2) (0 beyond sqrt (cut2)) and k times its
+  * offset from x. exponent: log2 (e) / b^2. Parameters rather than locals so that restrict
+  * holds (GCC ignores it on locals) and the loop vectorises without overlap checks. */
+void
+kernelWeights (const float *__restrict ax, const float *__restrict ay, const float *__restrict az,
+               const float *__restrict aw, std::size_t n, const Eigen::Vector3f &x, float exponent, float cut2,
+               float *__restrict kx, float *__restrict ky, float *__restrict kz, float *__restrict k)
+{
+  const float x0 = x.x (), y0 = x.y (), z0 = x.z ();
+  for (std::size_t i = 0; i < n; ++i)
+  {
+    const float dx = ax[i] - x0, dy = ay[i] - y0, dz = az[i] - z0;
+    const float d2 = dx * dx + dy * dy + dz * dz;
+    // Beyond the cut the weight is 0; the exponent is taken of the clamped distance so that
+    // it stays a finite number to multiply by that 0.
+    const float inside = std::max (0.f, std::copysign (1.f, cut2 - d2));
+    const float w = inside * aw[i] * exp2NonPositive (-std::min (d2, cut2) * exponent);
+    k[i] = w;
+    kx[i] = w * dx;
+    ky[i] = w * dy;
+    kz[i] = w * dz;
+  }
+}
+
+/** The atoms of the 27 kernel-grid cells around a mean-shift point, copied into plain arrays
+  * and kept while the point stays in its cell (a path moves millimetres per step, so most
+  * steps reuse them): a step is then two vectorised passes over contiguous floats instead of
+  * 27 hash lookups and scattered reads. */
+class KernelNeighbourhood
+{
+public:
+  KernelNeighbourhood (const Grid &grid, const std::vector<Sample> &atoms, float bandwidth)
+    : grid_ (grid), atoms_ (atoms), exponent_ (1.4426950409f / (bandwidth * bandwidth)), cut2_ (9.f * bandwidth * bandwidth)
+  {
+  }
+
+  /** One mean-shift step from x: the weighted mean of the atoms within 3 bandwidths under
+    * the Gaussian kernel. \return false if no atom is within reach */
+  bool step (const Eigen::Vector3f &x, Eigen::Vector3f &next)
+  {
+    const Eigen::Vector3i cell = grid_.coords (x);
+    if (!filled_ || cell != cell_)
+      gather (x, cell);
+    const std::size_t n = ax_.size ();
+    kernelWeights (ax_.data (), ay_.data (), az_.data (), aw_.data (), n, x, exponent_, cut2_, kx_.data (), ky_.data (),
+                   kz_.data (), k_.data ());
+    const float *kx = kx_.data (), *ky = ky_.data (), *kz = kz_.data (), *k = k_.data ();
+    const float den = laneSum (k, n);
+    if (!(den > 0.f))
+      return false;
+    next = x + Eigen::Vector3f (laneSum (kx, n), laneSum (ky, n), laneSum (kz, n)) / den;
+    return true;
+  }
+
+private:
+  void gather (const Eigen::Vector3f &x, const Eigen::Vector3i &cell)
+  {
+    ax_.clear ();
+    ay_.clear ();
+    az_.clear ();
+    aw_.clear ();
+    grid_.around (x, [&] (int a) {
+      const Sample &atom = atoms_[static_cast<std::size_t> (a)];
+      ax_.push_back (atom.x.x ());
+      ay_.push_back (atom.x.y ());
+      az_.push_back (atom.x.z ());
+      aw_.push_back (atom.w);
+    });
+    kx_.resize (ax_.size ());
+    ky_.resize (ax_.size ());
+    kz_.resize (ax_.size ());
+    k_.resize (ax_.size ());
+    cell_ = cell;
+    filled_ = true;
+  }
+
+  const Grid &grid_;
+  const std::vector<Sample> &atoms_;
+  float exponent_, cut2_;  ///< log2(e) / b^2 (exp2 of its product is the kernel), (3 b)^2
+  Eigen::Vector3i cell_ = Eigen::Vector3i::Zero ();
+  bool filled_ = false;
+  std::vector<float> ax_, ay_, az_, aw_, kx_, ky_, kz_, k_;
 };
 }  // namespace
 
@@ -255,7 +378,7 @@ PartModeEstimation::computeFrom (const pcl::PointCloud<BodyPartLabelPoint> &labe
       std::vector<int> samples;
     };
     std::vector<Found> found;
-    const float inv_b2 = 1.f / (b * b), cut2 = 9.f * b * b;
+    KernelNeighbourhood neighbourhood (kernel_grid, atoms, b);
     for (const auto &cell : seed_cells)
     {
       Eigen::Vector3d seed = Eigen::Vector3d::Zero ();
@@ -268,19 +391,9 @@ PartModeEstimation::computeFrom (const pcl::PointCloud<BodyPartLabelPoint> &labe
       Eigen::Vector3f x = (seed / wsum).cast<float> ();
       for (int it = 0; it < P.max_iterations; ++it)
       {
-        Eigen::Vector3d num = Eigen::Vector3d::Zero ();
-        double den = 0.0;
-        kernel_grid.around (x, [&] (int a) {
-          const float d2 = (atoms[a].x - x).squaredNorm ();
-          if (d2 > cut2)
-            return;
-          const double k = atoms[a].w * std::exp (-d2 * inv_b2);
-          num += atoms[a].x.cast<double> () * k;
-          den += k;
-        });
-        if (!(den > 0.0))
+        Eigen::Vector3f next;
+        if (!neighbourhood.step (x, next))
           break;
-        const Eigen::Vector3f next = (num / den).cast<float> ();
         const float step = (next - x).norm ();
         x = next;
         if (step < P.convergence)

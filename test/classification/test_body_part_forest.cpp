@@ -1034,6 +1034,64 @@ TEST (PartModeEstimation, TwoHandsWithTipsAndDirections)
   EXPECT_FALSE (estimation.compute (labels, modes));
 }
 
+// The mode must be a fixed point of the Gaussian mean shift the header documents (kernel
+// exp (-d^2 / b^2), cut at 3 b), computed here in double precision with std::exp: this pins
+// the estimator's fast kernel arithmetic to the real Gaussian. The density is lopsided (a
+// heavy blob and a light one 4 cm apart, both within the kernel's reach), so a kernel of the
+// wrong width or shape would settle elsewhere.
+TEST (PartModeEstimation, ModeIsAFixedPointOfTheGaussianMeanShift)
+{
+  pcl::PointCloud<agex::BodyPartLabelPoint> labels (60, 40);
+  const float f = 200.f;  // 1 cm per pixel at 2 m
+  for (int v = 0; v < 40; ++v)
+    for (int u = 0; u < 60; ++u)
+    {
+      const bool heavy = u >= 20 && u < 28 && v >= 16 && v < 24;
+      const bool light = u >= 32 && u < 36 && v >= 18 && v < 22;
+      if (!heavy && !light)
+        continue;
+      agex::BodyPartLabelPoint &q = labels (u, v);
+      q.z = 2.f + 0.002f * static_cast<float> ((u * 7 + v * 3) % 5);  // a little relief
+      q.x = (u - 30.f) * q.z / f;
+      q.y = (v - 20.f) * q.z / f;
+      q.p_head = heavy ? 0.9f : 0.5f;
+      q.p_hand = q.p_foot = 0.f;
+      q.p_other = 1.f - q.p_head;
+      q.label = agex::kLabelHead;
+    }
+  agex::PartModeEstimation estimation;
+  agex::PartModeParams params;
+  params.fx = params.fy = f;
+  estimation.setParams (params);
+  std::vector<agex::PartMode> modes;
+  ASSERT_TRUE (estimation.compute (labels, modes));
+  ASSERT_EQ (modes.size (), 1u);
+  const Eigen::Vector3d x = modes[0].position.cast<double> ();
+  const double b = params.bandwidth[agex::kLabelHead];
+  Eigen::Vector3d num = Eigen::Vector3d::Zero ();
+  double den = 0.0;
+  for (const auto &q : labels)
+  {
+    if (q.label != agex::kLabelHead)
+      continue;
+    const Eigen::Vector3d p = q.getVector3fMap ().cast<double> ();
+    const double d2 = (p - x).squaredNorm ();
+    if (d2 > 9.0 * b * b)
+      continue;
+    const double k = q.p_head * q.z * q.z * std::exp (-d2 / (b * b));
+    num += k * p;
+    den += k;
+  }
+  ASSERT_GT (den, 0.0);
+  const Eigen::Vector3d next = num / den;
+  // The estimator sums cell means (atoms) rather than pixels, a quarter bandwidth wide: a few
+  // tenths of a millimetre; a wrong kernel moves the mode by centimetres towards a blob.
+  EXPECT_LT ((next - x).norm (), 5e-4) << "mode " << x.transpose () << ", one step from it " << next.transpose ();
+  // Between the blobs' centres, pulled towards the heavy one.
+  EXPECT_GT (x.x (), -0.07);
+  EXPECT_LT (x.x (), -0.01);
+}
+
 // pixel_step 2 (a forest pass at stride 2): only the pixels at even columns and rows are samples,
 // each standing for 4 pixels. The modes must be those of the same cloud with every other pixel
 // unlabelled, with 4 times the mass.

@@ -80,7 +80,8 @@ main (int argc, char **argv)
         doc = compareWith (flags, argc, argv);
       else
         doc = agex::apps::benchDataset (flags.dataset_spec, flags.keyframes_only,
-                                        agex::apps::loadDetector (flags.detector), flags.passes, flags.jobs);
+                                        agex::apps::loadDetector (flags.detector), flags.passes, flags.jobs,
+                                        static_cast<std::size_t> (flags.memory_frames));
     }
     else
     {

@@ -3,8 +3,11 @@
 #include <agex/common/statistics.h>
 #include <agex/keypoints/agex_keypoint.h>
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <chrono>
+#include <fstream>
 #include <map>
 #include <stdexcept>
 
@@ -147,6 +150,53 @@ benchmarkDetector (const std::vector<Cloud::ConstPtr> &clouds, const DetectorSet
   for (const auto &stage : stage_order)
     bench.stages.emplace_back (stage, summariseTimings (per_frame[stage]));
   bench.total = summariseTimings (per_frame["total"]);
+  return bench;
+}
+
+std::size_t
+residentBytes ()
+{
+  // statm: total program size, then resident pages.
+  std::ifstream statm ("/proc/self/statm");
+  std::size_t size = 0, resident = 0;
+  if (!(statm >> size >> resident))
+    return 0;
+  const long page = sysconf (_SC_PAGESIZE);
+  return page > 0 ? resident * static_cast<std::size_t> (page) : 0;
+}
+
+MemoryBenchmark
+benchmarkMemory (const std::vector<Cloud::ConstPtr> &clouds, const DetectorSetup &setup, float fx, float fy,
+                 std::size_t frames, std::size_t interval, const std::function<void (std::size_t, std::size_t)> &progress)
+{
+  if (clouds.empty ())
+    throw std::invalid_argument ("benchmarkMemory: no frames");
+  if (interval == 0)
+    throw std::invalid_argument ("benchmarkMemory: the sampling interval must be at least one frame");
+  BodyPartDetector<pcl::PointXYZ> detector;
+  setup (detector);
+  detector.setFocalLength (fx, fy);
+  std::vector<BodyPartDetection> detections;
+  MemoryBenchmark bench;
+  bench.frames = frames;
+  for (std::size_t f = 0; f < frames; ++f)
+  {
+    detector.setInputCloud (clouds[f % clouds.size ()]);
+    detector.compute (detections);
+    const std::size_t done = f + 1;
+    if (done == std::min (frames, clouds.size ()))
+      bench.after_first_pass = residentBytes ();
+    if (done % interval == 0 || done == frames)
+    {
+      const std::size_t rss = residentBytes ();
+      bench.samples.emplace_back (done, rss);
+      bench.peak = std::max (bench.peak, rss);
+      if (progress)
+        progress (done, frames);
+    }
+  }
+  bench.final = bench.samples.empty () ? residentBytes () : bench.samples.back ().second;
+  bench.peak = std::max ({bench.peak, bench.final, bench.after_first_pass});
   return bench;
 }
 }  // namespace agex

@@ -7,6 +7,7 @@
 #include <agex/detection/benchmark.h>
 #include <agex/io/frame_io.h>
 
+#include <limits>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -67,5 +68,40 @@ TEST (Benchmark, DetectorStagesOverFrames)
   EXPECT_GT (bench.total.median, 0.0);
   const auto one = agex::timeDetection (frame.cloud, setup, 525.f, 525.f);
   EXPECT_EQ (one.size (), bench.stages.size ());
+}
+// The memory run: samples at the interval and at the end, the first pass's figure taken after
+// every frame ran once, and a detector in a steady stream that does not grow: 60 frames of the
+// same two clouds after the first pass may not add more than 4 MiB (a leak of one frame's
+// cloud, about 7 MiB at 640x480, each frame would show as hundreds).
+TEST (Benchmark, MemoryOfALongStream)
+{
+  EXPECT_THROW (agex::benchmarkMemory ({}, [] (agex::BodyPartDetector<pcl::PointXYZ> &) {}, 525.f, 525.f, 5, 1),
+                std::invalid_argument);
+  const agex::Frame frame = agex::loadFrame (kFrame);
+  const std::vector<pcl::PointCloud<pcl::PointXYZ>::ConstPtr> one{frame.cloud};
+  EXPECT_THROW (agex::benchmarkMemory (one, [] (agex::BodyPartDetector<pcl::PointXYZ> &) {}, 525.f, 525.f, 5, 0),
+                std::invalid_argument);
+  AGEX_REQUIRE_SHARED_FILE (kModel, "the bundled AGEX model");
+  if (agex::residentBytes () == 0)
+    GTEST_SKIP () << "no /proc/self/statm: resident memory cannot be read here";
+  const auto model = std::make_shared<const agex::DetectorModel> (agex::DetectorModel::load (kModel));
+  const agex::DetectorSetup setup = [&] (agex::BodyPartDetector<pcl::PointXYZ> &detector) {
+    detector.setModel (model);
+  };
+  pcl::PointCloud<pcl::PointXYZ>::Ptr empty (new pcl::PointCloud<pcl::PointXYZ> (*frame.cloud));
+  for (auto &p : *empty)
+    p.x = p.y = p.z = std::numeric_limits<float>::quiet_NaN ();
+  const std::vector<pcl::PointCloud<pcl::PointXYZ>::ConstPtr> clouds{frame.cloud, empty};
+  std::vector<std::size_t> steps;
+  const agex::MemoryBenchmark memory =
+      agex::benchmarkMemory (clouds, setup, 525.f, 525.f, 62, 20, [&] (std::size_t done, std::size_t) { steps.push_back (done); });
+  EXPECT_EQ (steps, (std::vector<std::size_t>{20, 40, 60, 62}));
+  ASSERT_EQ (memory.samples.size (), 4u);
+  EXPECT_EQ (memory.samples.back ().first, 62u);
+  EXPECT_EQ (memory.final, memory.samples.back ().second);
+  EXPECT_GT (memory.after_first_pass, 0u);
+  EXPECT_GE (memory.peak, memory.final);
+  EXPECT_GE (memory.peak, memory.after_first_pass);
+  EXPECT_LT (memory.growth (), 4ll << 20) << "resident memory grew over a steady stream";
 }
 }  // namespace

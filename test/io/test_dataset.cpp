@@ -1271,6 +1271,31 @@ TEST_F (BodyPartApps, BenchDatasetReportsStagesAndThroughput)
   EXPECT_NE (run (quoted (AGEX_BENCH_EXECUTABLE) + " --dataset " + quoted (dataset ()) + " " +
                   quoted (AGEX_SOURCE_DIR "/data/frames/bonn_1_002.png") + " >> " + quoted (log ()) + " 2>&1"),
              0);
+
+  // The memory run: 30 frames, sampled about every 20th of them, in the report and the JSON.
+  const std::string memory_json = tmp_.file ("memory.json"), memory_out = tmp_.file ("memory.txt");
+  ASSERT_EQ (run (quoted (AGEX_BENCH_EXECUTABLE) + " --dataset " + quoted (dataset ()) + " --keyframes --model " +
+                  quoted (model ()) + " --passes 1 --jobs 1 --memory-frames 30 --json " + quoted (memory_json) +
+                  " > " + quoted (memory_out) + " 2>&1"),
+             0)
+      << readText (memory_out);
+  EXPECT_NE (readText (memory_out).find ("MiB after 30 frames"), std::string::npos) << readText (memory_out);
+  const auto memory = nlohmann::json::parse (readText (memory_json)).at ("memory");
+  EXPECT_EQ (memory.at ("frames").get<int> (), 30);
+  ASSERT_EQ (memory.at ("samples").size (), 30u);  // every frame: 30 / 20 rounds down to 1
+  EXPECT_EQ (memory["samples"].back ().at ("frames").get<int> (), 30);
+  EXPECT_GT (memory.at ("final_bytes").get<double> (), 0.0);
+  EXPECT_EQ (memory.at ("growth_bytes").get<long long> (),
+             memory["final_bytes"].get<long long> () - memory.at ("after_first_pass_bytes").get<long long> ());
+  // Its range, and that it needs a dataset.
+  for (const std::string &bad : {" --dataset " + quoted (dataset ()) + " --memory-frames -1",
+                                " --dataset " + quoted (dataset ()) + " --memory-frames 10000001",
+                                std::string (" --memory-frames 10")})
+  {
+    const std::string out = tmp_.file ("memory_bad.txt");
+    EXPECT_EQ (run (quoted (AGEX_BENCH_EXECUTABLE) + bad + " > " + quoted (out) + " 2>&1"), 1) << bad;
+    EXPECT_NE (readText (out).find ("--memory-frames"), std::string::npos) << readText (out);
+  }
 }
 
 TEST_F (BodyPartApps, BenchComparesTwoBuildsInTurns)

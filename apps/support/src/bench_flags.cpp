@@ -34,7 +34,10 @@ parseBenchFlags (int argc, char **argv, BenchFlags &flags)
     ("compare-with", po::value (&flags.compare_with),
      "with --dataset: another build directory; run its bin/agex_bench and this one in turns, one thread each, and "
      "print every stage's ratio this / other")
-    ("rounds", po::value (&flags.rounds)->default_value (flags.rounds), "with --compare-with: runs of each build");
+    ("rounds", po::value (&flags.rounds)->default_value (flags.rounds), "with --compare-with: runs of each build")
+    ("memory-frames", po::value (&flags.memory_frames)->default_value (flags.memory_frames),
+     "with --dataset: then run one detector over this many frames (the selected ones in turn) and report its "
+     "resident memory after the first pass and as it goes (0: no such run)");
   po::options_description all;
   all.add (general).add (detectorOptionsDescription (flags.detector, kBundledModelFile))
      .add (frameOptionsDescription (flags.frame_options))
@@ -49,6 +52,10 @@ parseBenchFlags (int argc, char **argv, BenchFlags &flags)
     throw std::runtime_error ("--bench-k, --repeat, --passes, --jobs and --rounds must be at least 1");
   if (flags.repeat > 100000 || flags.passes > 1000 || flags.jobs > 1024 || flags.rounds > 100)
     throw std::runtime_error ("--repeat must be at most 100000, --passes 1000, --jobs 1024 and --rounds 100");
+  if (flags.memory_frames < 0 || flags.memory_frames > 10000000)
+    throw std::runtime_error ("--memory-frames must lie in 0..10,000,000");
+  if (flags.memory_frames > 0 && (flags.dataset_spec.empty () || !flags.compare_with.empty ()))
+    throw std::runtime_error ("--memory-frames runs the detector over a --dataset, without --compare-with");
   if (!flags.compare_with.empty () && flags.dataset_spec.empty ())
     throw std::runtime_error ("--compare-with times the detector over a --dataset: give one");
   if (flags.k > 1000)

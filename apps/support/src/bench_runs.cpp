@@ -4,6 +4,7 @@
 #include <agex/apps/dataset_selection.h>
 #include <agex/detection/benchmark.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cstdio>
@@ -93,7 +94,8 @@ benchFrames (const std::vector<std::string> &inputs, const FrameOptions &frame_o
 }
 
 nlohmann::json
-benchDataset (const std::string &spec, bool keyframes_only, const LoadedDetector &loaded, int passes, int jobs)
+benchDataset (const std::string &spec, bool keyframes_only, const LoadedDetector &loaded, int passes, int jobs,
+              std::size_t memory_frames)
 {
   const DatasetSelection selection = selectDataset (spec, keyframes_only);
   if (selection.frame_ids.empty ())
@@ -135,7 +137,7 @@ benchDataset (const std::string &spec, bool keyframes_only, const LoadedDetector
   std::printf ("  throughput     %8.1f frames/s with %d job%s (%u hardware threads)\n", fps, jobs,
                jobs == 1 ? "" : "s", std::thread::hardware_concurrency ());
 
-  return {{"dataset", spec},
+  nlohmann::json doc = {{"dataset", spec},
           {"model", loaded.files.front ()},
           {"detector_mode", loaded.mode_name},
           {"forest", loaded.forest ? loaded.files.back () : std::string ()},
@@ -147,6 +149,29 @@ benchDataset (const std::string &spec, bool keyframes_only, const LoadedDetector
           {"ms_per_frame", statsJson (bench.total)},
           {"stages", stages},
           {"throughput", {{"jobs", jobs}, {"frames_per_second", fps}}}};
+  if (memory_frames > 0)
+  {
+    // About twenty samples, so that a slow growth shows as a trend, not one number.
+    const std::size_t interval = std::max<std::size_t> (1, memory_frames / 20);
+    Progress memory_progress ("memory run frames", memory_frames);
+    const MemoryBenchmark memory = benchmarkMemory (
+        clouds, setup, fx, fy, memory_frames, interval, [&] (std::size_t done, std::size_t) { memory_progress.step (done); });
+    constexpr double kMiB = 1024.0 * 1024.0;
+    std::printf ("  memory         %.1f MiB after the first pass, %.1f MiB after %zu frames (growth %+.1f MiB, peak "
+                 "%.1f MiB)\n",
+                 memory.after_first_pass / kMiB, memory.final / kMiB, memory.frames, memory.growth () / kMiB,
+                 memory.peak / kMiB);
+    nlohmann::json samples = nlohmann::json::array ();
+    for (const auto &[frames, bytes] : memory.samples)
+      samples.push_back ({{"frames", frames}, {"resident_bytes", bytes}});
+    doc["memory"] = {{"frames", memory.frames},
+                     {"after_first_pass_bytes", memory.after_first_pass},
+                     {"final_bytes", memory.final},
+                     {"peak_bytes", memory.peak},
+                     {"growth_bytes", memory.growth ()},
+                     {"samples", samples}};
+  }
+  return doc;
 }
 }  // namespace apps
 }  // namespace agex

@@ -80,4 +80,29 @@ struct DetectorBenchmark
 DetectorBenchmark benchmarkDetector (const std::vector<pcl::PointCloud<pcl::PointXYZ>::ConstPtr> &clouds,
                                      const DetectorSetup &setup, float fx, float fy, int passes,
                                      const std::function<void (std::size_t, std::size_t)> &progress = {});
+
+/** The process's resident memory in bytes (Linux: /proc/self/statm), 0 where it cannot be read. */
+std::size_t residentBytes ();
+
+/** Resident memory over a long stream (benchmarkMemory), bytes. */
+struct MemoryBenchmark
+{
+  std::size_t frames = 0;
+  std::size_t after_first_pass = 0;  ///< after every frame ran once (buffers at their size)
+  std::size_t final = 0, peak = 0;   ///< at the end; the largest sample (every interval frames)
+  /** (frames run, resident bytes) every interval frames, the last at frames. */
+  std::vector<std::pair<std::size_t, std::size_t>> samples;
+  /** final - after_first_pass (negative when memory was returned). */
+  long long growth () const { return static_cast<long long> (final) - static_cast<long long> (after_first_pass); }
+};
+
+/** \brief Runs one detector over frames cyclically (frame i % clouds.size ()) for the given
+  * number of frames, as a program processing a stream holds it, and samples residentBytes ()
+  * after the first pass over the frames and every interval frames: memory that grows with
+  * the frames run is a leak or an unbounded cache. progress (done, total) every interval.
+  * \throws std::invalid_argument when clouds is empty or interval is 0 */
+MemoryBenchmark benchmarkMemory (const std::vector<pcl::PointCloud<pcl::PointXYZ>::ConstPtr> &clouds,
+                                 const DetectorSetup &setup, float fx, float fy, std::size_t frames,
+                                 std::size_t interval,
+                                 const std::function<void (std::size_t, std::size_t)> &progress = {});
 }  // namespace agex

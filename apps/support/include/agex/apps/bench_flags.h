@@ -24,6 +24,7 @@ struct BenchFlags
   int rounds = 5;            ///< alternating rounds of --compare-with
   bool keyframes_only = false, no_portrait = false;
   int k = 20, repeat = 30, passes = 3;
+  long long memory_frames = 0;  ///< with dataset_spec: frames of the resident-memory run (0: none)
   int jobs = static_cast<int> (std::clamp (std::thread::hardware_concurrency (), 1u, 1024u));
   DetectorChoice detector;
   FrameOptions frame_options;

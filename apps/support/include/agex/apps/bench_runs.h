@@ -25,9 +25,11 @@ nlohmann::json benchFrames (const std::vector<std::string> &inputs, const FrameO
                             const DepthPipelineParams &params, int k, int repeat, bool portrait);
 
 /** agex_bench --dataset: the detector's stages over the selected frames on one thread (passes
-  * runs per frame), then frames per second with jobs threads, every frame once.
+  * runs per frame), then frames per second with jobs threads, every frame once; then, when
+  * memory_frames > 0, the resident memory of one detector over that many frames
+  * (agex::benchmarkMemory).
   * \throws std::runtime_error when no frame is selected */
 nlohmann::json benchDataset (const std::string &spec, bool keyframes_only, const LoadedDetector &loaded, int passes,
-                             int jobs);
+                             int jobs, std::size_t memory_frames = 0);
 }  // namespace apps
 }  // namespace agex

@@ -379,6 +379,16 @@ PartModeEstimation::computeFrom (const pcl::PointCloud<BodyPartLabelPoint> &labe
     };
     std::vector<Found> found;
     KernelNeighbourhood neighbourhood (kernel_grid, atoms, b);
+    // Basins of attraction: the cells a quarter bandwidth wide that a path crossed, each to the
+    // mode the path led to. A later path entering one of them joins that mode: two paths through
+    // the same small cell climb the same hill, and most seeds meet an earlier path within a few
+    // steps instead of climbing all the way.
+    const float path_cell = 0.25f * b;
+    std::unordered_map<std::int64_t, int> basin;
+    std::vector<std::int64_t> path;
+    const auto pathKey = [&] (const Eigen::Vector3f &p) {
+      return cellKey (cellOf (p.x (), path_cell), cellOf (p.y (), path_cell), cellOf (p.z (), path_cell));
+    };
     for (const auto &cell : seed_cells)
     {
       Eigen::Vector3d seed = Eigen::Vector3d::Zero ();
@@ -389,8 +399,18 @@ PartModeEstimation::computeFrom (const pcl::PointCloud<BodyPartLabelPoint> &labe
         wsum += samples[s].w;
       }
       Eigen::Vector3f x = (seed / wsum).cast<float> ();
+      int joined = -1;
+      path.clear ();
       for (int it = 0; it < P.max_iterations; ++it)
       {
+        const std::int64_t key = pathKey (x);
+        const auto hit = basin.find (key);
+        if (hit != basin.end ())
+        {
+          joined = hit->second;
+          break;
+        }
+        path.push_back (key);
         Eigen::Vector3f next;
         if (!neighbourhood.step (x, next))
           break;
@@ -402,11 +422,21 @@ PartModeEstimation::computeFrom (const pcl::PointCloud<BodyPartLabelPoint> &labe
         if (std::any_of (found.begin (), found.end (), [&] (const Found &f) { return (f.x - x).norm () < 0.1f * b; }))
           break;
       }
-      auto same = std::find_if (found.begin (), found.end (), [&] (const Found &f) { return (f.x - x).norm () < 0.5f * b; });
-      if (same == found.end ())
-        found.push_back ({x, cell});
-      else
-        same->samples.insert (same->samples.end (), cell.begin (), cell.end ());
+      int into = joined;
+      if (into < 0)
+      {
+        auto same = std::find_if (found.begin (), found.end (), [&] (const Found &f) { return (f.x - x).norm () < 0.5f * b; });
+        if (same == found.end ())
+        {
+          found.push_back ({x, {}});
+          into = static_cast<int> (found.size ()) - 1;
+        }
+        else
+          into = static_cast<int> (same - found.begin ());
+      }
+      found[static_cast<std::size_t> (into)].samples.insert (found[static_cast<std::size_t> (into)].samples.end (), cell.begin (), cell.end ());
+      for (const std::int64_t key : path)
+        basin.emplace (key, into);
     }
 
     std::vector<PartMode> part_modes;

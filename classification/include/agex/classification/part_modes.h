@@ -75,8 +75,10 @@ struct PartModeParams
   *   probability_threshold, weighted w = p z^2 (Shotton et al. Sec. 4: z^2 makes the weight
   *   proportional to the surface a pixel covers, so a part counts the same at any distance);
   * - mean shift with a Gaussian kernel of the part's bandwidth from one seed per bandwidth-
-  *   sized grid cell (the weighted mean of its pixels); seeds whose modes lie within half a
-  *   bandwidth of each other are one mode; a pixel supports the mode its cell's seed reached;
+  *   sized grid cell (the weighted mean of its pixels), seeds in cell order; seeds whose modes
+  *   lie within half a bandwidth of each other are one mode; a path that enters a cell a
+  *   quarter bandwidth wide which an earlier path crossed joins that path's mode (its basin
+  *   of attraction); a pixel supports the mode its cell's seed reached;
   * - direction: the base is the centroid of the labelled pixels outside the support (other
   *   parts, other modes) within contact_radius of a supporting pixel, where the part touches
   *   the rest of the body (the

@@ -261,10 +261,12 @@ PartModeEstimation::computeFrom (const pcl::PointCloud<BodyPartLabelPoint> &labe
   modes.clear ();
   const PartModeParams &P = params_;
   for (int c = 0; c < kLabelPartCount; ++c)
-    if (!(P.bandwidth[c] > 0.f) || !std::isfinite (P.bandwidth[c]) || !(P.reference_area[c] > 0.f) ||
+    // Bandwidths from 0.1 mm to 10 m: the kernel's exponent 1 / b^2 stays a finite float.
+    if (!(P.bandwidth[c] >= 1e-4f && P.bandwidth[c] <= 10.f) || !(P.reference_area[c] > 0.f) ||
         !std::isfinite (P.reference_area[c]))
     {
-      PCL_ERROR ("[agex::PartModeEstimation::compute] Bandwidths and reference areas must be finite and positive.\n");
+      PCL_ERROR ("[agex::PartModeEstimation::compute] Bandwidths must lie in 0.0001-10 m and reference areas be "
+                 "finite and positive.\n");
       return false;
     }
   if (!(P.fx > 0.f) || !(P.fy > 0.f) || !std::isfinite (P.fx) || !std::isfinite (P.fy) || P.max_iterations < 1 ||
@@ -347,7 +349,8 @@ PartModeEstimation::computeFrom (const pcl::PointCloud<BodyPartLabelPoint> &labe
     {
       const auto &q = labels[static_cast<std::size_t> (body[k])];
       const float p = q.probability (part);
-      if (std::isfinite (p) && p >= P.probability_threshold && p > 0.f)
+      // A finite weight (an absurd depth could overflow z^2): every mean below stays finite.
+      if (std::isfinite (p) && p >= P.probability_threshold && p > 0.f && std::isfinite (p * q.z * q.z))
         samples.push_back ({q.getVector3fMap (), p * q.z * q.z, p, body[k], static_cast<int> (k)});
     }
     if (samples.empty ())
@@ -379,10 +382,10 @@ PartModeEstimation::computeFrom (const pcl::PointCloud<BodyPartLabelPoint> &labe
     };
     std::vector<Found> found;
     KernelNeighbourhood neighbourhood (kernel_grid, atoms, b);
-    // Basins of attraction: the cells a quarter bandwidth wide that a path crossed, each to the
-    // mode the path led to. A later path entering one of them joins that mode: two paths through
-    // the same small cell climb the same hill, and most seeds meet an earlier path within a few
-    // steps instead of climbing all the way.
+    // Basins of attraction: the cells a quarter bandwidth wide in which a path's steps landed,
+    // each to the mode the path led to. A later path landing in one of them joins that mode: two
+    // paths through the same small cell climb the same hill, and most seeds meet an earlier path
+    // within a few steps instead of climbing all the way.
     const float path_cell = 0.25f * b;
     std::unordered_map<std::int64_t, int> basin;
     std::vector<std::int64_t> path;
@@ -400,6 +403,10 @@ PartModeEstimation::computeFrom (const pcl::PointCloud<BodyPartLabelPoint> &labe
       }
       Eigen::Vector3f x = (seed / wsum).cast<float> ();
       int joined = -1;
+      // Only a path that ends at a mode (converged, or reached one found before) marks its cells:
+      // one stopped by the iteration limit or an empty neighbourhood would hand its trail to a
+      // point that is no mode.
+      bool settled = false;
       path.clear ();
       for (int it = 0; it < P.max_iterations; ++it)
       {
@@ -408,6 +415,7 @@ PartModeEstimation::computeFrom (const pcl::PointCloud<BodyPartLabelPoint> &labe
         if (hit != basin.end ())
         {
           joined = hit->second;
+          settled = true;
           break;
         }
         path.push_back (key);
@@ -417,10 +425,16 @@ PartModeEstimation::computeFrom (const pcl::PointCloud<BodyPartLabelPoint> &labe
         const float step = (next - x).norm ();
         x = next;
         if (step < P.convergence)
+        {
+          settled = true;
           break;
+        }
         // A path that reaches a mode already found ends there: it would climb the same hill.
         if (std::any_of (found.begin (), found.end (), [&] (const Found &f) { return (f.x - x).norm () < 0.1f * b; }))
+        {
+          settled = true;
           break;
+        }
       }
       int into = joined;
       if (into < 0)
@@ -435,8 +449,9 @@ PartModeEstimation::computeFrom (const pcl::PointCloud<BodyPartLabelPoint> &labe
           into = static_cast<int> (same - found.begin ());
       }
       found[static_cast<std::size_t> (into)].samples.insert (found[static_cast<std::size_t> (into)].samples.end (), cell.begin (), cell.end ());
-      for (const std::int64_t key : path)
-        basin.emplace (key, into);
+      if (settled)
+        for (const std::int64_t key : path)
+          basin.emplace (key, into);
     }
 
     std::vector<PartMode> part_modes;

@@ -171,8 +171,8 @@ benchmarkMemory (const std::vector<Cloud::ConstPtr> &clouds, const DetectorSetup
 {
   if (clouds.empty ())
     throw std::invalid_argument ("benchmarkMemory: no frames");
-  if (interval == 0)
-    throw std::invalid_argument ("benchmarkMemory: the sampling interval must be at least one frame");
+  if (interval == 0 || frames == 0)
+    throw std::invalid_argument ("benchmarkMemory: the frames to run and the sampling interval must be at least one");
   BodyPartDetector<pcl::PointXYZ> detector;
   setup (detector);
   detector.setFocalLength (fx, fy);

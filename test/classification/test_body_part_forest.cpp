@@ -1038,7 +1038,8 @@ TEST (PartModeEstimation, TwoHandsWithTipsAndDirections)
 // exp (-d^2 / b^2), cut at 3 b), computed here in double precision with std::exp: this pins
 // the estimator's fast kernel arithmetic to the real Gaussian. The density is lopsided (a
 // heavy blob and a light one 4 cm apart, both within the kernel's reach), so a kernel of the
-// wrong width or shape would settle elsewhere.
+// wrong width or shape would settle elsewhere (blobs 4 cm apart at their edges, 10 cm between
+// centres).
 TEST (PartModeEstimation, ModeIsAFixedPointOfTheGaussianMeanShift)
 {
   pcl::PointCloud<agex::BodyPartLabelPoint> labels (60, 40);
@@ -1085,7 +1086,8 @@ TEST (PartModeEstimation, ModeIsAFixedPointOfTheGaussianMeanShift)
   ASSERT_GT (den, 0.0);
   const Eigen::Vector3d next = num / den;
   // The estimator sums cell means (atoms) rather than pixels, a quarter bandwidth wide: a few
-  // tenths of a millimetre; a wrong kernel moves the mode by centimetres towards a blob.
+  // hundredths of a millimetre here; a kernel 10% too wide or narrow moves it by 0.6 mm, 1.4
+  // times too wide by 2 mm.
   EXPECT_LT ((next - x).norm (), 5e-4) << "mode " << x.transpose () << ", one step from it " << next.transpose ();
   // Between the blobs' centres, pulled towards the heavy one.
   EXPECT_GT (x.x (), -0.07);

@@ -1290,6 +1290,7 @@ TEST_F (BodyPartApps, BenchDatasetReportsStagesAndThroughput)
   // Its range, and that it needs a dataset.
   for (const std::string &bad : {" --dataset " + quoted (dataset ()) + " --memory-frames -1",
                                 " --dataset " + quoted (dataset ()) + " --memory-frames 10000001",
+                                " --dataset " + quoted (dataset ()) + " --keyframes --memory-frames 21",
                                 std::string (" --memory-frames 10")})
   {
     const std::string out = tmp_.file ("memory_bad.txt");

@@ -151,13 +151,20 @@ benchDataset (const std::string &spec, bool keyframes_only, const LoadedDetector
           {"throughput", {{"jobs", jobs}, {"frames_per_second", fps}}}};
   if (memory_frames > 0)
   {
+    if (memory_frames < 2 * clouds.size ())
+      throw std::runtime_error ("--memory-frames " + std::to_string (memory_frames) + " must be at least twice the " +
+                                std::to_string (clouds.size ()) +
+                                " selected frames: growth is measured after a first pass over them");
     // About twenty samples, so that a slow growth shows as a trend, not one number.
     const std::size_t interval = std::max<std::size_t> (1, memory_frames / 20);
     Progress memory_progress ("memory run frames", memory_frames);
     const MemoryBenchmark memory = benchmarkMemory (
         clouds, setup, fx, fy, memory_frames, interval, [&] (std::size_t done, std::size_t) { memory_progress.step (done); });
     constexpr double kMiB = 1024.0 * 1024.0;
-    std::printf ("  memory         %.1f MiB after the first pass, %.1f MiB after %zu frames (growth %+.1f MiB, peak "
+    if (memory.final == 0)
+      std::printf ("  memory         unavailable (no /proc/self/statm to read)\n");
+    else
+      std::printf ("  memory         %.1f MiB after the first pass, %.1f MiB after %zu frames (growth %+.1f MiB, peak "
                  "%.1f MiB)\n",
                  memory.after_first_pass / kMiB, memory.final / kMiB, memory.frames, memory.growth () / kMiB,
                  memory.peak / kMiB);

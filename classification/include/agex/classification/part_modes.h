@@ -40,8 +40,8 @@ struct PartMode
 
 struct PartModeParams
 {
-  /** Mean-shift bandwidth b per part (metres; Gaussian kernel exp(-|x - x_i|^2 / b^2), cut at
-    * 3 b): head, hand, foot, other body. Shotton et al. learned 0.06-0.07 m for their joints. */
+  /** Mean-shift bandwidth b per part (metres, 0.0001-10; Gaussian kernel exp(-|x - x_i|^2 / b^2),
+    * cut at 3 b): head, hand, foot, other body. Shotton et al. learned 0.06-0.07 m for their joints. */
   std::array<float, kLabelPartCount> bandwidth{{0.065f, 0.05f, 0.06f, 0.10f}};
   /** Pixels whose part probability is below this are not part of the density (Shotton's
     * lambda_c). */
@@ -76,9 +76,9 @@ struct PartModeParams
   *   proportional to the surface a pixel covers, so a part counts the same at any distance);
   * - mean shift with a Gaussian kernel of the part's bandwidth from one seed per bandwidth-
   *   sized grid cell (the weighted mean of its pixels), seeds in cell order; seeds whose modes
-  *   lie within half a bandwidth of each other are one mode; a path that enters a cell a
-  *   quarter bandwidth wide which an earlier path crossed joins that path's mode (its basin
-  *   of attraction); a pixel supports the mode its cell's seed reached;
+  *   lie within half a bandwidth of each other are one mode; a path whose step lands in a cell
+  *   a quarter bandwidth wide where a step of an earlier path that reached a mode landed joins
+  *   that mode (its basin of attraction); a pixel supports the mode its cell's seed reached;
   * - direction: the base is the centroid of the labelled pixels outside the support (other
   *   parts, other modes) within contact_radius of a supporting pixel, where the part touches
   *   the rest of the body (the

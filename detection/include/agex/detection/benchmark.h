@@ -89,7 +89,10 @@ struct MemoryBenchmark
 {
   std::size_t frames = 0;
   std::size_t after_first_pass = 0;  ///< after every frame ran once (buffers at their size)
-  std::size_t final = 0, peak = 0;   ///< at the end; the largest sample (every interval frames)
+  std::size_t final = 0;  ///< at the end
+  /** The largest sample (after the first pass, every interval frames, at the end), not the
+    * high-water mark between samples. */
+  std::size_t peak = 0;
   /** (frames run, resident bytes) every interval frames, the last at frames. */
   std::vector<std::pair<std::size_t, std::size_t>> samples;
   /** final - after_first_pass (negative when memory was returned). */
@@ -98,9 +101,12 @@ struct MemoryBenchmark
 
 /** \brief Runs one detector over frames cyclically (frame i % clouds.size ()) for the given
   * number of frames, as a program processing a stream holds it, and samples residentBytes ()
-  * after the first pass over the frames and every interval frames: memory that grows with
-  * the frames run is a leak or an unbounded cache. progress (done, total) every interval.
-  * \throws std::invalid_argument when clouds is empty or interval is 0 */
+  * after the first pass over the frames (or after all of them, when frames <= clouds.size ())
+  * and every interval frames: memory that grows with the frames run is a leak or an unbounded
+  * cache. The allocator may still settle in the first passes (glibc moves its threshold for
+  * returning large blocks the first time one is freed); a trend over the samples says more
+  * than one difference. progress (done, total) every interval.
+  * \throws std::invalid_argument when clouds is empty, or frames or interval is 0 */
 MemoryBenchmark benchmarkMemory (const std::vector<pcl::PointCloud<pcl::PointXYZ>::ConstPtr> &clouds,
                                  const DetectorSetup &setup, float fx, float fy, std::size_t frames,
                                  std::size_t interval,

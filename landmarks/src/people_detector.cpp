@@ -52,6 +52,8 @@ checkTrainingParams (const PeopleDetectorTrainingParams &params)
     throw std::invalid_argument ("people detector training: the window must be 16 to 1024 pixels wide and high");
   if (!(params.c > 0) || !(params.epsilon > 0) || params.c > 1e6)
     throw std::invalid_argument ("people detector training: C must lie in (0, 1e6] and epsilon be positive");
+  if (!(params.loss_per_missed_target > 0 && params.loss_per_missed_target <= 1000))
+    throw std::invalid_argument ("people detector training: the loss per missed person must lie in (0, 1000]");
   if (params.upsample < 0 || params.upsample > 4)
     throw std::invalid_argument ("people detector training: upsample must lie in 0..4");
   const double lo = params.train_min_person_windows, hi = params.train_max_person_windows;
@@ -172,6 +174,7 @@ PeopleDetector::train (const std::vector<cv::Mat> &grey_images, const std::vecto
   trainer.set_num_threads (params.num_threads ? params.num_threads : std::max (1u, std::thread::hardware_concurrency ()));
   trainer.set_c (params.c);
   trainer.set_epsilon (params.epsilon);
+  trainer.set_loss_per_missed_target (params.loss_per_missed_target);
   if (params.verbose)
     trainer.be_verbose ();
   // Boxes no window position can reach would make the problem infeasible: drop them.

@@ -20,6 +20,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <limits>
 #include <random>
 
 namespace
@@ -699,6 +700,29 @@ TEST (PeopleDetector, TrainingOnTinyImagesAtASmallScaleIsAClearError)
   catch (const std::invalid_argument &e)
   {
     EXPECT_NE (std::string (e.what ()).find ("no box"), std::string::npos) << e.what ();
+  }
+}
+
+// The loss per missed person is bounded: 0 would make every person free to miss, a huge value
+// every false detection free.
+TEST (PeopleDetector, LossPerMissedPersonOutsideItsRangeIsRefused)
+{
+  const cv::Mat image (128, 128, CV_8UC1, cv::Scalar (9));
+  const std::vector<std::vector<cv::Rect>> boxes{{cv::Rect (32, 16, 48, 96)}};
+  for (const double loss : {0.0, -1.0, 1001.0, std::numeric_limits<double>::quiet_NaN ()})
+  {
+    agex::PeopleDetectorTrainingParams params;
+    params.loss_per_missed_target = loss;
+    params.num_threads = 1;
+    try
+    {
+      agex::PeopleDetector::train ({image}, boxes, params);
+      ADD_FAILURE () << "trained with the loss per missed person " << loss;
+    }
+    catch (const std::invalid_argument &e)
+    {
+      EXPECT_NE (std::string (e.what ()).find ("missed person"), std::string::npos) << e.what ();
+    }
   }
 }
 

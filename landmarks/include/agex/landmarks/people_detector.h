@@ -18,6 +18,11 @@ struct PeopleDetectorTrainingParams
     * the data: the seed's 0.65 underfits (see doc/landmarks.md for the comparison). */
   double c = 20.0;
   double epsilon = 0.01;
+  /** The loss of a missed person relative to a false detection's (dlib's
+    * loss_per_missed_target). Images without people (people-free bands) and the hard negatives
+    * mined in each image outweigh the people as their number grows, and the SVM then scores
+    * every window below 0; raising this weights the people back. Bounded to (0, 1000]. */
+  double loss_per_missed_target = 1.0;
   /** The detection window (pixels): its height is the smallest person found without
     * upsampling, its shape the boxes' (48x96: half as wide as high, which an upright person
     * fits, arms and stride included). Training boxes are made this shape around their centre,

@@ -22,7 +22,8 @@ OUT="${1:-$ROOT/data/models/agex_people_detector.svm}"
 BIN="${2:-$ROOT/build}/bin"
 WORK="${3:-$(mktemp -d)}"
 RECIPE="${RECIPE:-ccp}"
-C="${AGEX_DETECTOR_C:-100}"
+C="${AGEX_DETECTOR_C:-20}"
+LOSS="${AGEX_DETECTOR_LOSS_MISSED:-10}"
 DATA="$ROOT/../shared/data/people2d"
 CCP="$DATA/ccp"
 INRIA="$DATA/inria_pos/images"
@@ -33,6 +34,8 @@ case "$RECIPE" in
 esac
 python3 -c "import sys; c = float(sys.argv[1]); sys.exit(0 if 0 < c <= 1e6 else 1)" "$C" 2> /dev/null ||
   { echo "train_people_detector: AGEX_DETECTOR_C must be a number in (0, 1e6], not '$C'" >&2; exit 1; }
+python3 -c "import sys; c = float(sys.argv[1]); sys.exit(0 if 0 < c <= 1000 else 1)" "$LOSS" 2> /dev/null ||
+  { echo "train_people_detector: AGEX_DETECTOR_LOSS_MISSED must be a number in (0, 1000], not '$LOSS'" >&2; exit 1; }
 for need in "${needs[@]}"; do
   [ -d "$need" ] || { echo "train_people_detector: $need is missing (see ../shared/README.md)" >&2; exit 1; }
 done
@@ -53,6 +56,7 @@ if [ "$RECIPE" = ccp ]; then
   "$BIN/agex_landmarks_train" "${STUB[@]}" --detector-out "$OUT" --detector-c 20
 else
   "$BIN/agex_landmarks_train" "${STUB[@]}" --detector-out "$OUT" --detector-c "$C" \
+    --detector-loss-missed "$LOSS" --detector-epsilon 0.1 \
     --detector-crops "$INRIA" --detector-crops-box 24,32,48,96 --detector-crops-held-out 0 \
     --detector-crops-min-height 72 --detector-crops-max-height 200 --detector-backgrounds 1 \
     --detector-window-width 40 --detector-window-height 80 --detector-scale 1.25

@@ -9,6 +9,7 @@
 #include <agex/landmarks/contour_annotation.h>
 #include <agex/landmarks/contour_shape_predictor.h>
 #include <agex/landmarks/imglab_dataset.h>
+#include <agex/landmarks/landmark_evaluation.h>
 #include <agex/landmarks/people_detector.h>
 #include <agex/landmarks/person_masks.h>
 
@@ -20,6 +21,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <limits>
 #include <random>
 
@@ -724,6 +726,22 @@ TEST (PeopleDetector, LossPerMissedPersonOutsideItsRangeIsRefused)
       EXPECT_NE (std::string (e.what ()).find ("missed person"), std::string::npos) << e.what ();
     }
   }
+}
+
+// Recall at 0.1 false detections per image by hand: 10 images allow 1 false detection, so the
+// walk down the scores keeps 0.9, 0.7 and the tie at 0.6 (a hit and the first false one: 3 of
+// 4 found) and stops at the second false one (0.5). Allowing none, the tie at 0.6 goes too.
+TEST (LandmarkEvaluation, RecallAtFalseDetectionsByHand)
+{
+  double at = 0;
+  const std::vector<std::pair<double, bool>> scored{{0.9, true}, {0.5, false}, {0.6, false}, {0.7, true}, {0.6, true}, {0.4, true}};
+  EXPECT_NEAR (agex::recallAtFalseDetections (scored, 4, 10, 0.1, &at), 0.75, 1e-12);
+  EXPECT_DOUBLE_EQ (at, 0.6);
+  EXPECT_NEAR (agex::recallAtFalseDetections (scored, 4, 10, 0.0, &at), 0.5, 1e-12);
+  EXPECT_DOUBLE_EQ (at, 0.7);
+  EXPECT_NEAR (agex::recallAtFalseDetections ({{0.3, false}}, 4, 1, 0.5, &at), 0.0, 1e-12);
+  EXPECT_TRUE (std::isinf (at));
+  EXPECT_EQ (agex::recallAtFalseDetections (scored, 0, 10, 0.1), 0.0);
 }
 
 // All-point interpolated AP by hand: hits at ranks 1 and 3 of 3 truths: precision 1 up to

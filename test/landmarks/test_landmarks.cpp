@@ -705,6 +705,40 @@ TEST (PeopleDetector, TrainingOnTinyImagesAtASmallScaleIsAClearError)
   }
 }
 
+// An ensemble of a detector with itself is the detector: the duplicates are suppressed. A
+// member's offset moves its threshold, and its scores by as much the other way.
+TEST (PeopleDetector, EnsembleMergesItsMembersDetections)
+{
+  const cv::Mat image = cv::imread (std::string (AGEX_SOURCE_DIR) + "/data/images/five_people.jpg");
+  ASSERT_FALSE (image.empty ());
+  const std::string bundled = std::string (AGEX_SOURCE_DIR) + "/data/models/agex_people_detector.svm";
+  const auto alone = agex::PeopleDetector::load (bundled).detect (image, -0.5);
+  ASSERT_FALSE (alone.empty ());
+  std::vector<agex::PeopleDetector> twins;
+  twins.push_back (agex::PeopleDetector::load (bundled));
+  twins.push_back (agex::PeopleDetector::load (bundled));
+  const auto both = agex::PeopleDetector::combine (std::move (twins), {0.0, 0.0}).detect (image, -0.5);
+  ASSERT_EQ (both.size (), alone.size ());
+  for (std::size_t i = 0; i < both.size (); ++i)
+  {
+    EXPECT_EQ (both[i].box, alone[i].box);
+    EXPECT_DOUBLE_EQ (both[i].score, alone[i].score);
+  }
+  std::vector<agex::PeopleDetector> one;
+  one.push_back (agex::PeopleDetector::load (bundled));
+  const auto shifted = agex::PeopleDetector::combine (std::move (one), {-0.3}).detect (image, -0.2);
+  ASSERT_EQ (shifted.size (), alone.size ());  // threshold -0.2 + offset -0.3: the -0.5 above
+  for (std::size_t i = 0; i < shifted.size (); ++i)
+    EXPECT_NEAR (shifted[i].score, alone[i].score + 0.3, 1e-12);
+  EXPECT_THROW (agex::PeopleDetector::combine ({}, {}), std::invalid_argument);
+  std::vector<agex::PeopleDetector> bad;
+  bad.push_back (agex::PeopleDetector::openCvDefault ());
+  EXPECT_THROW (agex::PeopleDetector::combine (std::move (bad), {6.0}), std::invalid_argument);
+  std::vector<agex::PeopleDetector> saved;
+  saved.push_back (agex::PeopleDetector::openCvDefault ());
+  EXPECT_THROW (agex::PeopleDetector::combine (std::move (saved), {0.0}).save ("/nonexistent/x.svm"), std::logic_error);
+}
+
 // The loss per missed person is bounded: 0 would make every person free to miss, a huge value
 // every false detection free.
 TEST (PeopleDetector, LossPerMissedPersonOutsideItsRangeIsRefused)

@@ -163,6 +163,9 @@ detectorChoiceOptions (PeopleDetectorChoice &choice)
   options.add_options () ("detector", po::value (&choice.path),
                           "people detector file (default: the bundled one), or 'opencv-hog': OpenCV's pretrained HOG "
                           "people detector")
+    ("detector-also", po::value (&choice.also)->composing (),
+     "FILE or FILE@OFFSET (repeatable): another people detector run with the first as one; its detections at the "
+     "threshold + OFFSET (in [-5, 5]) count, their scores less OFFSET")
     ("opencv-detector", po::bool_switch (&choice.opencv), "use OpenCV's pretrained HOG people detector instead (as "
      "--detector opencv-hog)")
     ("opencv-scale", po::value (&choice.opencv_scale)->default_value (choice.opencv_scale),
@@ -181,9 +184,28 @@ loadPeopleDetector (const PeopleDetectorChoice &choice)
     throw std::runtime_error ("--opencv-scale applies to OpenCV's detector only (--detector opencv-hog)");
   if (choice.opencv && !choice.path.empty ())
     throw std::runtime_error ("--detector and --opencv-detector name two detectors; give one");
-  if (choice.opencv || opencv_hog)
-    return PeopleDetector::openCvDefault (choice.opencv_scale);
-  return PeopleDetector::load (choice.path.empty () ? bundledPeopleDetectorFile () : choice.path);
+  PeopleDetector first = choice.opencv || opencv_hog
+                          ? PeopleDetector::openCvDefault (choice.opencv_scale)
+                          : PeopleDetector::load (choice.path.empty () ? bundledPeopleDetectorFile () : choice.path);
+  if (choice.also.empty ())
+    return first;
+  std::vector<PeopleDetector> members;
+  std::vector<double> offsets{0.0};
+  members.push_back (std::move (first));
+  for (const std::string &item : choice.also)
+  {
+    const std::size_t at = item.rfind ('@');
+    double offset = 0.0;
+    if (at != std::string::npos)
+    {
+      std::istringstream in (item.substr (at + 1));
+      if (!(in >> offset) || !(in >> std::ws).eof () || !(offset >= -5.0 && offset <= 5.0))
+        throw std::runtime_error ("--detector-also " + item + ": the offset after '@' must be a number in [-5, 5]");
+    }
+    members.push_back (PeopleDetector::load (item.substr (0, at)));
+    offsets.push_back (offset);
+  }
+  return PeopleDetector::combine (std::move (members), offsets);
 }
 
 LandmarkInputs

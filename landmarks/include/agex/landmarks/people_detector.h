@@ -80,6 +80,14 @@ public:
     * time) and misses people shorter than about 96 / scale pixels (the apps use 0.5).
     * \throws std::invalid_argument unless 0.05 < scale <= 4 */
   static PeopleDetector openCvDefault (double scale = 1.0);
+  /** Several detectors as one: each member's detections at its own threshold (offsets[i] added
+    * to detect ()'s), their scores shifted by -offsets[i] so that every member's threshold is
+    * 0, merged and suppressed as one detector's. Detectors trained on different photos (CCP's
+    * fashion photos, INRIA's street crops) find different people; scores of different SVMs are
+    * only roughly comparable, hence the offsets. Not saved: combined when loaded.
+    * \throws std::invalid_argument for no member, an empty one, a count mismatch or an offset
+    * outside [-5, 5] */
+  static PeopleDetector combine (std::vector<PeopleDetector> members, const std::vector<double> &offsets);
   /** \throws std::runtime_error naming the file when it is missing or not a detector */
   static PeopleDetector load (const std::string &path);
   /** Writes the trained detector atomically. \throws std::logic_error for the fallback */

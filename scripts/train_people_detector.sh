@@ -6,13 +6,17 @@
 #     they are and their people pasted 2 per photo into each other's photos; window 48x96, C 20.
 #     9 min 20 s on 2 idle cores; 14 min for the same recipe on 719 photos while another
 #     session's training used the cores.
-#   RECIPE=ccp+inria: the candidate of issue 35, not bundled (it lost; doc/landmarks.md). The
-#     CCP photos but every fifth (0005, 0010, ..., 0900: the held-out fold), as above, plus
-#     INRIA's person crops but every fifth (0, 5, 10, ... in name order) pasted 2 per photo into
-#     them (people 72-200 pixels tall), plus the photos' people-free bands (each outline grown
-#     by 0.1 of its height, cut away); window 40x80 on the image enlarged 1.25 times (people from
-#     64 pixels), C as AGEX_DETECTOR_C (default 100). 33 min at C 20 on the shared machine. The
-#     INRIA crops are for training only: never copy them into the repository.
+#   RECIPE=ccp+inria: the candidate of issue 35, not bundled (doc/landmarks.md, "Street
+#     pedestrians"). The CCP photos but every fifth (0005, 0010, ..., 0900: the held-out fold),
+#     as above, plus INRIA's person crops but those of every fifth source photo (the held-out
+#     fold) pasted 2 per photo into them (people 72-200 pixels tall), plus the photos'
+#     people-free bands (each outline grown by 0.1 of its height, cut away); window 48x96 on the
+#     image enlarged 1.25 times (people from 77 pixels; a 40x80 window scored every window below
+#     0, even trained on CCP alone), C as AGEX_DETECTOR_C (default 20), a missed person costing
+#     AGEX_DETECTOR_LOSS_MISSED false detections (default 2), epsilon 0.01 times that. Not run at
+#     full size yet: its first iterations took 30 s each on the shared machine (a fifth of the
+#     data: 8 minutes in all). The INRIA crops are for training only: never copy them into the
+#     repository.
 # Usage: [RECIPE=ccp|ccp+inria] scripts/train_people_detector.sh [OUT_FILE] [BUILD_DIR] [WORK_DIR]
 # (default OUT_FILE: data/models/agex_people_detector.svm; an earlier detector there is replaced,
 # any other file refused by agex_landmarks_train).
@@ -22,7 +26,8 @@ OUT="${1:-$ROOT/data/models/agex_people_detector.svm}"
 BIN="${2:-$ROOT/build}/bin"
 WORK="${3:-$(mktemp -d)}"
 RECIPE="${RECIPE:-ccp}"
-C="${AGEX_DETECTOR_C:-100}"
+C="${AGEX_DETECTOR_C:-20}"
+LOSS="${AGEX_DETECTOR_LOSS_MISSED:-2}"
 DATA="$ROOT/../shared/data/people2d"
 CCP="$DATA/ccp"
 INRIA="$DATA/inria_pos/images"
@@ -33,6 +38,8 @@ case "$RECIPE" in
 esac
 python3 -c "import sys; c = float(sys.argv[1]); sys.exit(0 if 0 < c <= 1e6 else 1)" "$C" 2> /dev/null ||
   { echo "train_people_detector: AGEX_DETECTOR_C must be a number in (0, 1e6], not '$C'" >&2; exit 1; }
+python3 -c "import sys; c = float(sys.argv[1]); sys.exit(0 if 0 < c <= 1000 else 1)" "$LOSS" 2> /dev/null ||
+  { echo "train_people_detector: AGEX_DETECTOR_LOSS_MISSED must be a number in (0, 1000], not '$LOSS'" >&2; exit 1; }
 for need in "${needs[@]}"; do
   [ -d "$need" ] || { echo "train_people_detector: $need is missing (see ../shared/README.md)" >&2; exit 1; }
 done
@@ -53,7 +60,8 @@ if [ "$RECIPE" = ccp ]; then
   "$BIN/agex_landmarks_train" "${STUB[@]}" --detector-out "$OUT" --detector-c 20
 else
   "$BIN/agex_landmarks_train" "${STUB[@]}" --detector-out "$OUT" --detector-c "$C" \
+    --detector-loss-missed "$LOSS" --detector-epsilon "$(python3 -c "import sys; print(0.01 * float(sys.argv[1]))" "$LOSS")" \
     --detector-crops "$INRIA" --detector-crops-box 24,32,48,96 --detector-crops-held-out 0 \
     --detector-crops-min-height 72 --detector-crops-max-height 200 --detector-backgrounds 1 \
-    --detector-window-width 40 --detector-window-height 80 --detector-scale 1.25
+    --detector-window-width 48 --detector-window-height 96 --detector-scale 1.25
 fi

@@ -6,6 +6,8 @@
 #include <algorithm>
 #include <chrono>
 #include <memory>
+#include <limits>
+#include <cmath>
 #include <stdexcept>
 
 namespace agex
@@ -149,6 +151,34 @@ LandmarkEvaluation::addDetections (DetectionScores &scores, const std::vector<cv
   }
 }
 
+double
+recallAtFalseDetections (std::vector<std::pair<double, bool>> scored, std::size_t positives, std::size_t images,
+                         double max_per_image, double *score)
+{
+  if (score)
+    *score = std::numeric_limits<double>::infinity ();
+  if (positives == 0 || images == 0)
+    return 0.0;
+  std::sort (scored.begin (), scored.end (), [] (const std::pair<double, bool> &a, const std::pair<double, bool> &b) {
+    return a.first > b.first;
+  });
+  std::size_t hits = 0, misses = 0, best_hits = 0;
+  for (std::size_t i = 0; i < scored.size ();)
+  {
+    // Detections of equal score are kept or dropped together: one threshold cannot split them.
+    std::size_t j = i;
+    for (; j < scored.size () && scored[j].first == scored[i].first; ++j)
+      (scored[j].second ? hits : misses) += 1;
+    if (static_cast<double> (misses) > max_per_image * static_cast<double> (images))
+      break;
+    best_hits = hits;
+    if (score)
+      *score = scored[i].first;
+    i = j;
+  }
+  return static_cast<double> (best_hits) / static_cast<double> (positives);
+}
+
 nlohmann::json
 LandmarkEvaluation::DetectionScores::json (int min_height) const
 {
@@ -158,6 +188,10 @@ LandmarkEvaluation::DetectionScores::json (int min_height) const
   doc["detection_recall"] = meanOf (static_cast<double> (found), truths);
   doc["detection_ap"] = truths ? nlohmann::json (averagePrecision (scored, truths)) : nlohmann::json (nullptr);
   doc["false_detections_per_image"] = meanOf (static_cast<double> (false_detections), images);
+  double at = 0.0;
+  const double recall = recallAtFalseDetections (scored, truths, images, 0.1, &at);
+  doc["recall_at_0.1_fppi"] = truths && images ? nlohmann::json (recall) : nlohmann::json (nullptr);
+  doc["score_at_0.1_fppi"] = truths && images && std::isfinite (at) ? nlohmann::json (at) : nlohmann::json (nullptr);
   doc["detection_images"] = images;
   doc["ms_per_image_detect"] = meanOf (ms, images);
   return doc;

@@ -83,13 +83,42 @@ readPeopleCrops (const std::string &folder, const cv::Rect &person)
 std::vector<std::size_t>
 foldIndices (std::size_t count, int folds, int fold, bool test)
 {
+  std::vector<std::size_t> groups (count);
+  for (std::size_t i = 0; i < count; ++i)
+    groups[i] = i;
+  return foldIndices (groups, folds, fold, test);
+}
+
+std::vector<std::size_t>
+foldIndices (const std::vector<std::size_t> &groups, int folds, int fold, bool test)
+{
   if (folds < 2 || folds > 100 || fold < -1 || fold >= folds)
     throw std::invalid_argument ("folds: 2 to 100 folds, and a fold from -1 (none) to folds - 1");
   std::vector<std::size_t> out;
-  for (std::size_t i = 0; i < count; ++i)
-    if ((fold >= 0 && static_cast<int> (i % folds) == fold) == test)
+  for (std::size_t i = 0; i < groups.size (); ++i)
+    if ((fold >= 0 && static_cast<int> (groups[i] % folds) == fold) == test)
       out.push_back (i);
   return out;
+}
+
+std::vector<std::size_t>
+cropSourcePhotos (const std::vector<std::string> &names)
+{
+  std::vector<std::size_t> groups;
+  std::vector<std::string> keys;
+  for (const std::string &name : names)
+  {
+    std::string stem = std::filesystem::path (name).stem ().string ();
+    // crop001001a: the photo crop001001; a name ending in a digit (or one letter alone) is kept.
+    if (stem.size () >= 2 && std::islower (static_cast<unsigned char> (stem.back ())) &&
+        std::isdigit (static_cast<unsigned char> (stem[stem.size () - 2])))
+      stem.pop_back ();
+    const auto found = std::find (keys.begin (), keys.end (), stem);
+    groups.push_back (static_cast<std::size_t> (found - keys.begin ()));
+    if (found == keys.end ())
+      keys.push_back (stem);
+  }
+  return groups;
 }
 
 PeopleImages

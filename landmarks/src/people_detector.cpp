@@ -52,6 +52,8 @@ checkTrainingParams (const PeopleDetectorTrainingParams &params)
     throw std::invalid_argument ("people detector training: the window must be 16 to 1024 pixels wide and high");
   if (!(params.c > 0) || !(params.epsilon > 0) || params.c > 1e6)
     throw std::invalid_argument ("people detector training: C must lie in (0, 1e6] and epsilon be positive");
+  if (!(params.loss_per_missed_target > 0 && params.loss_per_missed_target <= 1000))
+    throw std::invalid_argument ("people detector training: the loss per missed person must lie in (0, 1000]");
   if (params.upsample < 0 || params.upsample > 4)
     throw std::invalid_argument ("people detector training: upsample must lie in 0..4");
   const double lo = params.train_min_person_windows, hi = params.train_max_person_windows;
@@ -105,6 +107,8 @@ struct PeopleDetector::Impl
   double scale = 1.0;
   dlib::object_detector<Scanner> fhog;
   cv::HOGDescriptor hog;
+  std::vector<PeopleDetector> members;  ///< an ensemble (combine ()) when not empty
+  std::vector<double> offsets;
 };
 
 PeopleDetector::PeopleDetector () = default;
@@ -172,6 +176,7 @@ PeopleDetector::train (const std::vector<cv::Mat> &grey_images, const std::vecto
   trainer.set_num_threads (params.num_threads ? params.num_threads : std::max (1u, std::thread::hardware_concurrency ()));
   trainer.set_c (params.c);
   trainer.set_epsilon (params.epsilon);
+  trainer.set_loss_per_missed_target (params.loss_per_missed_target);
   if (params.verbose)
     trainer.be_verbose ();
   // Boxes no window position can reach would make the problem infeasible: drop them.
@@ -212,6 +217,25 @@ PeopleDetector::openCvDefault (double scale)
 }
 
 PeopleDetector
+PeopleDetector::combine (std::vector<PeopleDetector> members, const std::vector<double> &offsets)
+{
+  if (members.empty () || members.size () != offsets.size ())
+    throw std::invalid_argument ("people detector ensemble: one offset per member, at least one member");
+  for (std::size_t i = 0; i < members.size (); ++i)
+  {
+    if (!members[i].impl_)
+      throw std::invalid_argument ("people detector ensemble: an empty member");
+    if (!(offsets[i] >= -5.0 && offsets[i] <= 5.0))
+      throw std::invalid_argument ("people detector ensemble: offsets must lie in [-5, 5]");
+  }
+  PeopleDetector detector;
+  detector.impl_ = std::make_unique<Impl> ();
+  detector.impl_->members = std::move (members);
+  detector.impl_->offsets = offsets;
+  return detector;
+}
+
+PeopleDetector
 PeopleDetector::load (const std::string &path)
 {
   std::ifstream in (path, std::ios::binary);
@@ -246,8 +270,8 @@ PeopleDetector::load (const std::string &path)
 void
 PeopleDetector::save (const std::string &path) const
 {
-  if (!impl_ || impl_->opencv_default)
-    throw std::logic_error ("PeopleDetector::save: only trained detectors can be saved");
+  if (!impl_ || impl_->opencv_default || !impl_->members.empty ())
+    throw std::logic_error ("PeopleDetector::save: only trained detectors can be saved (not OpenCV's, not an ensemble)");
   std::ostringstream out;
   out << kMagic << "\n";
   dlib::serialize (impl_->upsample, out);
@@ -267,6 +291,13 @@ PeopleDetector::description () const
 {
   if (!impl_)
     return "none";
+  if (!impl_->members.empty ())
+  {
+    std::string text = "ensemble of " + std::to_string (impl_->members.size ()) + ":";
+    for (std::size_t i = 0; i < impl_->members.size (); ++i)
+      text += (i ? "; " : " ") + impl_->members[i].description () + ", offset " + std::to_string (impl_->offsets[i]);
+    return text;
+  }
   if (impl_->opencv_default)
     return "OpenCV HOG people detector (Dalal-Triggs, 64x128)" +
            (impl_->scale != 1.0 ? ", scale " + std::to_string (impl_->scale) : std::string ());
@@ -284,6 +315,28 @@ PeopleDetector::detect (const cv::Mat &image, double threshold) const
   std::vector<PersonDetection> people;
   if (image.empty ())
     return people;
+  if (!impl_->members.empty ())
+  {
+    std::vector<PersonDetection> all;
+    for (std::size_t i = 0; i < impl_->members.size (); ++i)
+      for (PersonDetection d : impl_->members[i].detect (image, threshold + impl_->offsets[i]))
+      {
+        d.score -= impl_->offsets[i];
+        all.push_back (d);
+      }
+    sortByScore (all);
+    // The members' own suppression, across members: best first, a box that overlaps a kept
+    // one (IoU 0.5, or 95% of the smaller inside the other) is the same person.
+    const dlib::test_box_overlap overlap (kPeopleNmsIoU, kPeopleNmsCovered);
+    for (const PersonDetection &d : all)
+    {
+      const bool same = std::any_of (people.begin (), people.end (),
+                                     [&] (const PersonDetection &k) { return overlap (toDlib (k.box), toDlib (d.box)); });
+      if (!same)
+        people.push_back (d);
+    }
+    return people;
+  }
   const cv::Mat grey = toGrey (image);
   cv::Mat resized = grey;
   // An image that shrinks to nothing holds no person the detector could see.

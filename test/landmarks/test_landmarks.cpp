@@ -9,6 +9,7 @@
 #include <agex/landmarks/contour_annotation.h>
 #include <agex/landmarks/contour_shape_predictor.h>
 #include <agex/landmarks/imglab_dataset.h>
+#include <agex/landmarks/landmark_evaluation.h>
 #include <agex/landmarks/people_detector.h>
 #include <agex/landmarks/person_masks.h>
 
@@ -20,6 +21,8 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
+#include <limits>
 #include <random>
 
 namespace
@@ -700,6 +703,79 @@ TEST (PeopleDetector, TrainingOnTinyImagesAtASmallScaleIsAClearError)
   {
     EXPECT_NE (std::string (e.what ()).find ("no box"), std::string::npos) << e.what ();
   }
+}
+
+// An ensemble of a detector with itself is the detector: the duplicates are suppressed. A
+// member's offset moves its threshold, and its scores by as much the other way.
+TEST (PeopleDetector, EnsembleMergesItsMembersDetections)
+{
+  const cv::Mat image = cv::imread (std::string (AGEX_SOURCE_DIR) + "/data/images/five_people.jpg");
+  ASSERT_FALSE (image.empty ());
+  const std::string bundled = std::string (AGEX_SOURCE_DIR) + "/data/models/agex_people_detector.svm";
+  const auto alone = agex::PeopleDetector::load (bundled).detect (image, -0.5);
+  ASSERT_FALSE (alone.empty ());
+  std::vector<agex::PeopleDetector> twins;
+  twins.push_back (agex::PeopleDetector::load (bundled));
+  twins.push_back (agex::PeopleDetector::load (bundled));
+  const auto both = agex::PeopleDetector::combine (std::move (twins), {0.0, 0.0}).detect (image, -0.5);
+  ASSERT_EQ (both.size (), alone.size ());
+  for (std::size_t i = 0; i < both.size (); ++i)
+  {
+    EXPECT_EQ (both[i].box, alone[i].box);
+    EXPECT_DOUBLE_EQ (both[i].score, alone[i].score);
+  }
+  std::vector<agex::PeopleDetector> one;
+  one.push_back (agex::PeopleDetector::load (bundled));
+  const auto shifted = agex::PeopleDetector::combine (std::move (one), {-0.3}).detect (image, -0.2);
+  ASSERT_EQ (shifted.size (), alone.size ());  // threshold -0.2 + offset -0.3: the -0.5 above
+  for (std::size_t i = 0; i < shifted.size (); ++i)
+    EXPECT_NEAR (shifted[i].score, alone[i].score + 0.3, 1e-12);
+  EXPECT_THROW (agex::PeopleDetector::combine ({}, {}), std::invalid_argument);
+  std::vector<agex::PeopleDetector> bad;
+  bad.push_back (agex::PeopleDetector::openCvDefault ());
+  EXPECT_THROW (agex::PeopleDetector::combine (std::move (bad), {6.0}), std::invalid_argument);
+  std::vector<agex::PeopleDetector> saved;
+  saved.push_back (agex::PeopleDetector::openCvDefault ());
+  EXPECT_THROW (agex::PeopleDetector::combine (std::move (saved), {0.0}).save ("/nonexistent/x.svm"), std::logic_error);
+}
+
+// The loss per missed person is bounded: 0 would make every person free to miss, a huge value
+// every false detection free.
+TEST (PeopleDetector, LossPerMissedPersonOutsideItsRangeIsRefused)
+{
+  const cv::Mat image (128, 128, CV_8UC1, cv::Scalar (9));
+  const std::vector<std::vector<cv::Rect>> boxes{{cv::Rect (32, 16, 48, 96)}};
+  for (const double loss : {0.0, -1.0, 1001.0, std::numeric_limits<double>::quiet_NaN ()})
+  {
+    agex::PeopleDetectorTrainingParams params;
+    params.loss_per_missed_target = loss;
+    params.num_threads = 1;
+    try
+    {
+      agex::PeopleDetector::train ({image}, boxes, params);
+      ADD_FAILURE () << "trained with the loss per missed person " << loss;
+    }
+    catch (const std::invalid_argument &e)
+    {
+      EXPECT_NE (std::string (e.what ()).find ("missed person"), std::string::npos) << e.what ();
+    }
+  }
+}
+
+// Recall at 0.1 false detections per image by hand: 10 images allow 1 false detection, so the
+// walk down the scores keeps 0.9, 0.7 and the tie at 0.6 (a hit and the first false one: 3 of
+// 4 found) and stops at the second false one (0.5). Allowing none, the tie at 0.6 goes too.
+TEST (LandmarkEvaluation, RecallAtFalseDetectionsByHand)
+{
+  double at = 0;
+  const std::vector<std::pair<double, bool>> scored{{0.9, true}, {0.5, false}, {0.6, false}, {0.7, true}, {0.6, true}, {0.4, true}};
+  EXPECT_NEAR (agex::recallAtFalseDetections (scored, 4, 10, 0.1, &at), 0.75, 1e-12);
+  EXPECT_DOUBLE_EQ (at, 0.6);
+  EXPECT_NEAR (agex::recallAtFalseDetections (scored, 4, 10, 0.0, &at), 0.5, 1e-12);
+  EXPECT_DOUBLE_EQ (at, 0.7);
+  EXPECT_NEAR (agex::recallAtFalseDetections ({{0.3, false}}, 4, 1, 0.5, &at), 0.0, 1e-12);
+  EXPECT_TRUE (std::isinf (at));
+  EXPECT_EQ (agex::recallAtFalseDetections (scored, 0, 10, 0.1), 0.0);
 }
 
 // All-point interpolated AP by hand: hits at ranks 1 and 3 of 3 truths: precision 1 up to

@@ -15,6 +15,8 @@
 
 #include <algorithm>
 #include <set>
+#include <string>
+#include <vector>
 
 namespace
 {
@@ -190,6 +192,20 @@ TEST (PastedCrops, FoldsSplitTheCrops)
   EXPECT_TRUE (agex::foldIndices (12, 5, -1, true).empty ());
   EXPECT_THROW (agex::foldIndices (12, 1, 0, true), std::invalid_argument);
   EXPECT_THROW (agex::foldIndices (12, 5, 5, true), std::invalid_argument);
+}
+
+// INRIA cut several crops from one photo (crop001001a, crop001001c): they share a background
+// and must fall in one fold, or a held-out crop's background was trained on.
+TEST (PastedCrops, CropsOfOneSourcePhotoShareAFold)
+{
+  const std::vector<std::string> names{"crop001001a.png", "crop001001c.png", "crop001001e.png", "crop001002a.png",
+                                       "person_044a.png", "person_044c.png", "x.png", "a.png", "b.png", "crop2.png"};
+  const std::vector<std::size_t> photos = agex::cropSourcePhotos (names);
+  EXPECT_EQ (photos, (std::vector<std::size_t>{0, 0, 0, 1, 2, 2, 3, 4, 5, 6}));
+  const std::vector<std::size_t> test = agex::foldIndices (photos, 2, 0, true), train = agex::foldIndices (photos, 2, 0, false);
+  EXPECT_EQ (test, (std::vector<std::size_t>{0, 1, 2, 4, 5, 7, 9}));
+  EXPECT_EQ (train, (std::vector<std::size_t>{3, 6, 8}));
+  EXPECT_THROW (agex::foldIndices (photos, 2, 2, true), std::invalid_argument);
 }
 
 TEST (PastedCrops, BadCropFoldersAreNamed)

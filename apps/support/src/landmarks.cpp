@@ -80,6 +80,9 @@ detectorTrainerOptions (PeopleDetectorTraining &training)
   options.add_options ()
     ("detector-c", po::value (&p.c)->default_value (p.c), "SVM C")
     ("detector-epsilon", po::value (&p.epsilon)->default_value (p.epsilon), "SVM stopping tolerance")
+    ("detector-loss-missed", po::value (&p.loss_per_missed_target)->default_value (p.loss_per_missed_target),
+     "loss of a missed person relative to a false detection's, (0, 1000]: raise it when people-free images or many "
+     "negatives make the SVM score every window below 0")
     ("detector-window-width", po::value (&p.window_width)->default_value (p.window_width), "detection window width (pixels)")
     ("detector-window-height", po::value (&p.window_height)->default_value (p.window_height), "detection window height (pixels)")
     ("detector-upsample", po::value (&p.upsample)->default_value (p.upsample), "times to double the images (finds smaller people, slower)")
@@ -109,7 +112,7 @@ detectorCropOptions (PeopleCropChoice &choice, PeopleDetectorTraining &training)
     ("detector-crops", po::value (&choice.folder), "a folder of person crops (e.g. INRIA's 96x160 positives) pasted into the "
      "training photos, whose own people are then ignored")
     ("detector-crops-box", po::value (&choice.box)->default_value (choice.box), "the person's box in every crop: x,y,width,height")
-    ("detector-crops-folds", po::value (&choice.folds)->default_value (choice.folds), "crop i is in fold i mod this")
+    ("detector-crops-folds", po::value (&choice.folds)->default_value (choice.folds), "crops of the i-th source photo (names alike but a final letter: crop001001a, ...c) are in fold i mod this")
     ("detector-crops-held-out", po::value (&choice.fold)->default_value (choice.fold),
      "leave this fold of the crops out of training (-1: train on all)")
     ("detector-crops-per-image", po::value (&q.people_per_image)->default_value (q.people_per_image), "crops pasted into each photo")
@@ -138,8 +141,10 @@ loadPeopleCrops (const PeopleCropChoice &choice, bool test, std::vector<std::siz
   if (choice.folds < 2 || choice.folds > 100 || choice.fold < -1 || choice.fold >= choice.folds)
     throw std::runtime_error ("crop folds: 2 to 100 folds and a fold from -1 (none) to folds - 1");
   auto crops = std::make_shared<PeopleCrops> (readPeopleCrops (choice.folder, cv::Rect (x, y, w, h)));
-  which = test && choice.fold < 0 ? foldIndices (crops->images.size (), choice.folds, -1, false)
-                                  : foldIndices (crops->images.size (), choice.folds, choice.fold, test);
+  // Folds by source photo: crops of one photo share a background (and often people).
+  const std::vector<std::size_t> photos = cropSourcePhotos (crops->names);
+  which = test && choice.fold < 0 ? foldIndices (photos, choice.folds, -1, false)
+                                  : foldIndices (photos, choice.folds, choice.fold, test);
   if (which.empty ())
     throw std::runtime_error (choice.folder + ": no crop left in the chosen folds");
   return crops;
@@ -158,6 +163,9 @@ detectorChoiceOptions (PeopleDetectorChoice &choice)
   options.add_options () ("detector", po::value (&choice.path),
                           "people detector file (default: the bundled one), or 'opencv-hog': OpenCV's pretrained HOG "
                           "people detector")
+    ("detector-also", po::value (&choice.also)->composing (),
+     "FILE or FILE@OFFSET (repeatable): another people detector run with the first as one; its detections at the "
+     "threshold + OFFSET (in [-5, 5]) count, their scores less OFFSET")
     ("opencv-detector", po::bool_switch (&choice.opencv), "use OpenCV's pretrained HOG people detector instead (as "
      "--detector opencv-hog)")
     ("opencv-scale", po::value (&choice.opencv_scale)->default_value (choice.opencv_scale),
@@ -176,9 +184,28 @@ loadPeopleDetector (const PeopleDetectorChoice &choice)
     throw std::runtime_error ("--opencv-scale applies to OpenCV's detector only (--detector opencv-hog)");
   if (choice.opencv && !choice.path.empty ())
     throw std::runtime_error ("--detector and --opencv-detector name two detectors; give one");
-  if (choice.opencv || opencv_hog)
-    return PeopleDetector::openCvDefault (choice.opencv_scale);
-  return PeopleDetector::load (choice.path.empty () ? bundledPeopleDetectorFile () : choice.path);
+  PeopleDetector first = choice.opencv || opencv_hog
+                          ? PeopleDetector::openCvDefault (choice.opencv_scale)
+                          : PeopleDetector::load (choice.path.empty () ? bundledPeopleDetectorFile () : choice.path);
+  if (choice.also.empty ())
+    return first;
+  std::vector<PeopleDetector> members;
+  std::vector<double> offsets{0.0};
+  members.push_back (std::move (first));
+  for (const std::string &item : choice.also)
+  {
+    const std::size_t at = item.rfind ('@');
+    double offset = 0.0;
+    if (at != std::string::npos)
+    {
+      std::istringstream in (item.substr (at + 1));
+      if (!(in >> offset) || !(in >> std::ws).eof () || !(offset >= -5.0 && offset <= 5.0))
+        throw std::runtime_error ("--detector-also " + item + ": the offset after '@' must be a number in [-5, 5]");
+    }
+    members.push_back (PeopleDetector::load (item.substr (0, at)));
+    offsets.push_back (offset);
+  }
+  return PeopleDetector::combine (std::move (members), offsets);
 }
 
 LandmarkInputs
@@ -236,7 +263,7 @@ landmarkEvaluationOptions (LandmarkEvaluationFlags &f)
     ("crops", po::value (&f.crops.folder), "also score detection on these person crops (e.g. INRIA's) pasted into the tested "
      "photos, whose own people are ignored (\"crops\" in the report)")
     ("crops-box", po::value (&f.crops.box)->default_value (f.crops.box), "the person's box in every crop: x,y,width,height")
-    ("crops-folds", po::value (&f.crops.folds)->default_value (f.crops.folds), "crop i is in fold i mod this")
+    ("crops-folds", po::value (&f.crops.folds)->default_value (f.crops.folds), "crops of the i-th source photo (names alike but a final letter: crop001001a, ...c) are in fold i mod this")
     ("crops-fold", po::value (&f.crops.fold)->default_value (f.crops.fold), "score only this fold of the crops (-1: all)")
     ("crops-per-image", po::value (&f.settings.crop_params.people_per_image)->default_value (f.settings.crop_params.people_per_image),
      "crops pasted into each tested photo")

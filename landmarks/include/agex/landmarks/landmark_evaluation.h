@@ -83,6 +83,14 @@ private:
   DetectionScores detection_, pasted_, crops_;
 };
 
+/** Recall at the lowest score threshold that keeps the false detections per image at or below
+  * max_per_image (the operating point pedestrian benchmarks and issue 35's targets quote), from
+  * (score, true positive) pairs; *score (if not null) receives that threshold (+infinity when
+  * none qualifies: recall 0). Only the pairs given count: scored down to a threshold t, a recall
+  * reached at t is a lower bound. */
+double recallAtFalseDetections (std::vector<std::pair<double, bool>> scored, std::size_t positives, std::size_t images,
+                                double max_per_image, double *score = nullptr);
+
 /** How images are scored. */
 struct LandmarkEvaluationSettings
 {

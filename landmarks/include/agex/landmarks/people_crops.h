@@ -37,6 +37,15 @@ PeopleCrops readPeopleCrops (const std::string &folder, const cv::Rect &person);
   * \throws std::invalid_argument unless 2 <= folds <= 100 and -1 <= fold < folds */
 std::vector<std::size_t> foldIndices (std::size_t count, int folds, int fold, bool test);
 
+/** The source photo of each crop, numbered 0, 1, ... in the order of the names: crops cut from
+  * one photo share their name but a final letter (INRIA's crop001001a, crop001001c: the same
+  * background, often the same people), so that no photo is in two folds. A name without such a
+  * letter is its own photo. */
+std::vector<std::size_t> cropSourcePhotos (const std::vector<std::string> &names);
+
+/** As foldIndices, by group: index i is in fold groups[i] mod folds. */
+std::vector<std::size_t> foldIndices (const std::vector<std::size_t> &groups, int folds, int fold, bool test);
+
 struct PastedCropsParams
 {
   /** Each background is resized so that its height is between these (pixels; spread evenly

@@ -18,6 +18,11 @@ struct PeopleDetectorTrainingParams
     * the data: the seed's 0.65 underfits (see doc/landmarks.md for the comparison). */
   double c = 20.0;
   double epsilon = 0.01;
+  /** The loss of a missed person relative to a false detection's (dlib's
+    * loss_per_missed_target). Images without people (people-free bands) and the hard negatives
+    * mined in each image outweigh the people as their number grows, and the SVM then scores
+    * every window below 0; raising this weights the people back. Bounded to (0, 1000]. */
+  double loss_per_missed_target = 1.0;
   /** The detection window (pixels): its height is the smallest person found without
     * upsampling, its shape the boxes' (48x96: half as wide as high, which an upright person
     * fits, arms and stride included). Training boxes are made this shape around their centre,
@@ -75,6 +80,14 @@ public:
     * time) and misses people shorter than about 96 / scale pixels (the apps use 0.5).
     * \throws std::invalid_argument unless 0.05 < scale <= 4 */
   static PeopleDetector openCvDefault (double scale = 1.0);
+  /** Several detectors as one: each member's detections at its own threshold (offsets[i] added
+    * to detect ()'s), their scores shifted by -offsets[i] so that every member's threshold is
+    * 0, merged and suppressed as one detector's. Detectors trained on different photos (CCP's
+    * fashion photos, INRIA's street crops) find different people; scores of different SVMs are
+    * only roughly comparable, hence the offsets. Not saved: combined when loaded.
+    * \throws std::invalid_argument for no member, an empty one, a count mismatch or an offset
+    * outside [-5, 5] */
+  static PeopleDetector combine (std::vector<PeopleDetector> members, const std::vector<double> &offsets);
   /** \throws std::runtime_error naming the file when it is missing or not a detector */
   static PeopleDetector load (const std::string &path);
   /** Writes the trained detector atomically. \throws std::logic_error for the fallback */

@@ -61,6 +61,8 @@ struct PeopleDetectorChoice
   bool opencv = false;  ///< OpenCV's pretrained HOG people detector
   double opencv_scale = 0.5;
   bool none = false;    ///< no detection (agex_landmarks_eval --no-detector)
+  /** More detector files, each FILE or FILE@OFFSET, run with the first as one (PeopleDetector::combine). */
+  std::vector<std::string> also;
 };
 /** The --detector value that selects OpenCV's pretrained HOG people detector. */
 constexpr const char *kOpenCvHogName = "opencv-hog";

@@ -976,6 +976,19 @@ TEST (BodyPartLabeling, BadInputIsRefusedOrEmpty)
 
 // --- part modes --------------------------------------------------------------------------------
 
+namespace
+{
+/** The modes of labels with the default parameters but the focal length f (pixels). */
+bool
+modesWithFocal (const pcl::PointCloud<agex::BodyPartLabelPoint> &labels, float f, agex::PartModeEstimation &estimation,
+                agex::PartModeParams &params, std::vector<agex::PartMode> &modes)
+{
+  params.fx = params.fy = f;
+  estimation.setParams (params);
+  return estimation.compute (labels, modes);
+}
+}  // namespace
+
 TEST (PartModeEstimation, TwoHandsWithTipsAndDirections)
 {
   // A label cloud: a body column (other body) and two hand bars sticking out left and right
@@ -1001,10 +1014,8 @@ TEST (PartModeEstimation, TwoHandsWithTipsAndDirections)
     }
   agex::PartModeEstimation estimation;
   agex::PartModeParams params;
-  params.fx = params.fy = f;
-  estimation.setParams (params);
   std::vector<agex::PartMode> modes;
-  ASSERT_TRUE (estimation.compute (labels, modes));
+  ASSERT_TRUE (modesWithFocal (labels, f, estimation, params, modes));
   ASSERT_EQ (modes.size (), 2u);
   for (const auto &m : modes)
   {
@@ -1062,10 +1073,8 @@ TEST (PartModeEstimation, ModeIsAFixedPointOfTheGaussianMeanShift)
     }
   agex::PartModeEstimation estimation;
   agex::PartModeParams params;
-  params.fx = params.fy = f;
-  estimation.setParams (params);
   std::vector<agex::PartMode> modes;
-  ASSERT_TRUE (estimation.compute (labels, modes));
+  ASSERT_TRUE (modesWithFocal (labels, f, estimation, params, modes));
   ASSERT_EQ (modes.size (), 1u);
   const Eigen::Vector3d x = modes[0].position.cast<double> ();
   const double b = params.bandwidth[agex::kLabelHead];

@@ -14,6 +14,8 @@
 #include <filesystem>
 #include <random>
 #include <stdexcept>
+#include <string>
+#include <unordered_map>
 #include <utility>
 
 namespace agex
@@ -105,7 +107,7 @@ std::vector<std::size_t>
 cropSourcePhotos (const std::vector<std::string> &names)
 {
   std::vector<std::size_t> groups;
-  std::vector<std::string> keys;
+  std::unordered_map<std::string, std::size_t> photos;  // stem -> its number, in order of first sight
   for (const std::string &name : names)
   {
     std::string stem = std::filesystem::path (name).stem ().string ();
@@ -113,10 +115,7 @@ cropSourcePhotos (const std::vector<std::string> &names)
     if (stem.size () >= 2 && std::islower (static_cast<unsigned char> (stem.back ())) &&
         std::isdigit (static_cast<unsigned char> (stem[stem.size () - 2])))
       stem.pop_back ();
-    const auto found = std::find (keys.begin (), keys.end (), stem);
-    groups.push_back (static_cast<std::size_t> (found - keys.begin ()));
-    if (found == keys.end ())
-      keys.push_back (stem);
+    groups.push_back (photos.emplace (std::move (stem), photos.size ()).first->second);
   }
   return groups;
 }

@@ -617,6 +617,45 @@ FragmentDictionary::computeFeatures (const agex::DepthPatch &patch, const std::v
   computeDispatch (p, packed_, fragments_, which.data (), which.size (), features);
 }
 
+struct FragmentDictionary::PreparedPatch::Impl
+{
+  Prepared prepared;
+};
+
+FragmentDictionary::PreparedPatch::PreparedPatch () = default;
+FragmentDictionary::PreparedPatch::~PreparedPatch () = default;
+FragmentDictionary::PreparedPatch::PreparedPatch (PreparedPatch &&) noexcept = default;
+FragmentDictionary::PreparedPatch &FragmentDictionary::PreparedPatch::operator= (PreparedPatch &&) noexcept = default;
+
+int
+FragmentDictionary::PreparedPatch::size () const
+{
+  return impl_ ? impl_->prepared.n : 0;
+}
+
+void
+FragmentDictionary::prepare (const agex::DepthPatch &patch, PreparedPatch &prepared) const
+{
+  if (patch.size != patch_size_ || patch_size_ < 1)
+    throw std::invalid_argument ("FragmentDictionary::prepare: patch size " + std::to_string (patch.size) +
+                                 ", the dictionary was built for " + std::to_string (patch_size_));
+  if (!prepared.impl_)
+    prepared.impl_ = std::make_unique<PreparedPatch::Impl> ();
+  prepared.impl_->prepared.prepare (patch);
+}
+
+void
+FragmentDictionary::computeFeatures (const PreparedPatch &prepared, const int *which, std::size_t count,
+                                     float *features) const
+{
+  if (count == 0)
+    return;
+  if (prepared.size () != patch_size_ || patch_size_ < 1)
+    throw std::invalid_argument ("FragmentDictionary::computeFeatures: the prepared patch is not of size " +
+                                 std::to_string (patch_size_));
+  computeDispatch (prepared.impl_->prepared, packed_, fragments_, which, count, features);
+}
+
 void
 FragmentDictionary::write (cv::FileStorage &fs) const
 {

@@ -33,6 +33,9 @@ constexpr std::size_t kMetadataChunk = 1000;
 constexpr char kChunkFence = '|';
 /** classify () keeps features on the stack up to this many fragments. */
 constexpr std::size_t kStackFeatures = 2048;
+/** Bounds of a cascade, the same for training parameters and model files. */
+constexpr std::size_t kMaxCascadeStages = 32;
+constexpr std::size_t kMaxCascadeLevels = 16;
 /** Most auxiliary features a classifier may have (a bound for damaged files too). */
 constexpr std::size_t kMaxAuxiliaryFeatures = 1024;
 
@@ -156,6 +159,16 @@ checkTrainingSet (const std::vector<agex::DepthPatch> &patches, const std::vecto
     throw std::invalid_argument ("PatchClassifier::train: weak_count must be at least 1");
   if (!(params.weight_trim_rate >= 0.0 && params.weight_trim_rate <= 1.0))
     throw std::invalid_argument ("PatchClassifier::train: weight_trim_rate must be in [0, 1]");
+  if (params.cascade_stage_ends.size () > kMaxCascadeStages || params.cascade_levels.size () > kMaxCascadeLevels)
+    throw std::invalid_argument ("PatchClassifier::train: at most " + std::to_string (kMaxCascadeStages) +
+                                 " cascade stages and " + std::to_string (kMaxCascadeLevels) + " cascade levels");
+  for (std::size_t s = 0; s < params.cascade_stage_ends.size (); ++s)
+    if (params.cascade_stage_ends[s] < 1 || (s > 0 && params.cascade_stage_ends[s] <= params.cascade_stage_ends[s - 1]))
+      throw std::invalid_argument ("PatchClassifier::train: cascade_stage_ends must increase from 1");
+  for (std::size_t l = 0; l < params.cascade_levels.size (); ++l)
+    if (!(params.cascade_levels[l] > 0.f && params.cascade_levels[l] < 1.f) ||
+        (l > 0 && params.cascade_levels[l] <= params.cascade_levels[l - 1]))
+      throw std::invalid_argument ("PatchClassifier::train: cascade_levels must increase within (0, 1)");
 
   TrainingSet set;
   const int n = set.size = patches.front ().size;
@@ -466,6 +479,8 @@ PatchClassifier::train (const std::vector<agex::DepthPatch> &patches, const std:
   try
   {
     trained.prepare ();
+    trained.fitCascade (samples, labels);
+    trained.prepareCascade ();
   }
   catch (const ModelError &e)
   {
@@ -573,26 +588,65 @@ PatchClassifier::classify (const agex::DepthPatch &patch, float *margins, float 
 }
 
 void
+PatchClassifier::checkClassifyInput (const agex::DepthPatch &patch, const float *auxiliary, const char *caller) const
+{
+  if (!auxiliary && !auxiliary_names_.empty ())
+    throw std::invalid_argument (std::string ("PatchClassifier::") + caller + ": the classifier needs " +
+                                 std::to_string (auxiliary_names_.size ()) + " auxiliary features");
+  if (!trained ())
+    throw std::logic_error (std::string ("PatchClassifier::") + caller + ": the classifier is not trained");
+  if (patch.size != geometry_.size)
+    throw std::invalid_argument (std::string ("PatchClassifier::") + caller + ": patch size " +
+                                 std::to_string (patch.size) + ", the model was trained on " +
+                                 std::to_string (geometry_.size));
+}
+
+namespace
+{
+/** Feature storage for one classify call: on the stack up to kStackFeatures. */
+class FeatureBuffer
+{
+public:
+  explicit FeatureBuffer (std::size_t count)
+  {
+    if (count > kStackFeatures)
+    {
+      heap_.resize (count);
+      data_ = heap_.data ();
+    }
+  }
+  float *data () { return data_; }
+
+private:
+  float stack_[kStackFeatures];
+  std::vector<float> heap_;
+  float *data_ = stack_;
+};
+
+void
+writeOutputs (const double *sums, std::size_t classes, float *margins, float *confidences)
+{
+  for (std::size_t c = 0; c < classes; ++c)
+  {
+    const float margin = static_cast<float> (sums[c]);
+    if (margins)
+      margins[c] = margin;
+    if (confidences)
+      confidences[c] = static_cast<float> (1.0 / (1.0 + std::exp (-2.0 * static_cast<double> (margin))));
+  }
+}
+
+/** A classifier has few classes; more than this keep their sums on the heap. */
+constexpr std::size_t kStackClasses = 16;
+}  // namespace
+
+void
 PatchClassifier::classify (const agex::DepthPatch &patch, const float *auxiliary, float *margins,
                            float *confidences) const
 {
-  if (!auxiliary && !auxiliary_names_.empty ())
-    throw std::invalid_argument ("PatchClassifier::classify: the classifier needs " +
-                                 std::to_string (auxiliary_names_.size ()) + " auxiliary features");
-  if (!trained ())
-    throw std::logic_error ("PatchClassifier::classify: the classifier is not trained");
-  if (patch.size != geometry_.size)
-    throw std::invalid_argument ("PatchClassifier::classify: patch size " + std::to_string (patch.size) +
-                                 ", the model was trained on " + std::to_string (geometry_.size));
-  float stack[kStackFeatures];
-  std::vector<float> heap;
-  float *features = stack;
-  const std::size_t count = dictionary_.size () + auxiliary_names_.size ();
-  if (count > kStackFeatures)
-  {
-    heap.resize (count);
-    features = heap.data ();
-  }
+  checkClassifyInput (patch, auxiliary, "classify");
+  FeatureBuffer buffer (dictionary_.size () + auxiliary_names_.size ());
+  float *features = buffer.data ();
   dictionary_.computeFeatures (patch, used_fragments_, features);
   std::copy (auxiliary, auxiliary + auxiliary_names_.size (), features + dictionary_.size ());
   for (std::size_t c = 0; c < trees_.size (); ++c)
@@ -613,12 +667,210 @@ PatchClassifier::classify (const agex::DepthPatch &patch, const float *auxiliary
                                                                                                : node->right)];
         sum += node->value;
       }
-    const float margin = static_cast<float> (sum);
-    if (margins)
-      margins[c] = margin;
-    if (confidences)
-      confidences[c] = static_cast<float> (1.0 / (1.0 + std::exp (-2.0 * static_cast<double> (margin))));
+    writeOutputs (&sum, 1, margins ? margins + c : nullptr, confidences ? confidences + c : nullptr);
   }
+}
+
+bool
+PatchClassifier::classifyCascade (const agex::DepthPatch &patch, const float *auxiliary, float min_confidence,
+                                  float *margins, float *confidences) const
+{
+  const int level = stage_fragments_.empty () ? -1 : cascade_.levelFor (min_confidence);
+  if (level < 0)
+  {
+    classify (patch, auxiliary, margins, confidences);
+    return true;
+  }
+  checkClassifyInput (patch, auxiliary, "classifyCascade");
+  FeatureBuffer buffer (dictionary_.size () + auxiliary_names_.size ());
+  float *features = buffer.data ();
+  std::copy (auxiliary, auxiliary + auxiliary_names_.size (), features + dictionary_.size ());
+  FragmentDictionary::PreparedPatch prepared;
+  dictionary_.prepare (patch, prepared);
+
+  const std::size_t classes = trees_.size ();
+  double stack_sums[kStackClasses] = {};
+  std::vector<double> heap_sums (classes > kStackClasses ? classes : 0, 0.0);
+  double *sums = classes > kStackClasses ? heap_sums.data () : stack_sums;
+  const std::size_t stages = cascade_.stage_ends.size ();
+  std::size_t round = 0;
+  for (std::size_t s = 0; s <= stages; ++s)
+  {
+    const std::vector<int> &fragments = stage_fragments_[s];
+    dictionary_.computeFeatures (prepared, fragments.data (), fragments.size (), features);
+    const std::size_t end =
+        s < stages ? static_cast<std::size_t> (cascade_.stage_ends[s]) : std::numeric_limits<std::size_t>::max ();
+    bool alive = s == stages;
+    for (std::size_t c = 0; c < classes; ++c)
+    {
+      // The same stumps in the same order as classify (): the same double sums.
+      const std::vector<Stump> &stumps = trees_[c].stumps;
+      const std::size_t stop = std::min (end, stumps.size ());
+      double sum = sums[c];
+      for (std::size_t r = round; r < stop; ++r)
+      {
+        const Stump &st = stumps[r];
+        sum += features[st.feature] <= st.threshold ? st.left : st.right;
+      }
+      sums[c] = sum;
+      alive = alive || sum >= static_cast<double> (cascade_.threshold (static_cast<std::size_t> (level), c, s));
+    }
+    round = end;
+    if (!alive)
+    {
+      writeOutputs (sums, classes, margins, confidences);
+      return false;
+    }
+  }
+  writeOutputs (sums, classes, margins, confidences);
+  return true;
+}
+
+int
+SoftCascade::levelFor (float min_confidence) const
+{
+  int found = -1;
+  for (std::size_t l = 0; l < levels.size () && !stage_ends.empty (); ++l)
+    if (levels[l] <= min_confidence)
+      found = static_cast<int> (l);
+  return found;
+}
+
+namespace
+{
+/** A threshold no partial margin falls below: a class none of whose positives reached the level. */
+constexpr float kNeverBelow = -1e30f;
+
+/** \throws ModelError describing what in the cascade is out of range. */
+void
+checkCascade (const SoftCascade &cascade, std::size_t classes, std::size_t rounds)
+{
+  if (cascade.stage_ends.empty () || cascade.stage_ends.size () > kMaxCascadeStages)
+    throw ModelError ("the cascade needs 1 to " + std::to_string (kMaxCascadeStages) + " stages");
+  if (cascade.levels.empty () || cascade.levels.size () > kMaxCascadeLevels)
+    throw ModelError ("the cascade needs 1 to " + std::to_string (kMaxCascadeLevels) + " levels");
+  for (std::size_t s = 0; s < cascade.stage_ends.size (); ++s)
+    if (cascade.stage_ends[s] < 1 || static_cast<std::size_t> (cascade.stage_ends[s]) >= rounds ||
+        (s > 0 && cascade.stage_ends[s] <= cascade.stage_ends[s - 1]))
+      throw ModelError ("the cascade's stage ends must increase from 1 to below the " + std::to_string (rounds) +
+                        " rounds");
+  for (std::size_t l = 0; l < cascade.levels.size (); ++l)
+    if (!(cascade.levels[l] > 0.f && cascade.levels[l] < 1.f) || (l > 0 && cascade.levels[l] <= cascade.levels[l - 1]))
+      throw ModelError ("the cascade's levels must increase within (0, 1)");
+  if (cascade.classes != static_cast<int> (classes) ||
+      cascade.thresholds.size () != cascade.levels.size () * classes * cascade.stage_ends.size ())
+    throw ModelError ("the cascade needs levels x classes x stages thresholds");
+  for (const float t : cascade.thresholds)
+    if (!(std::fabs (t) <= -kNeverBelow))
+      throw ModelError ("a cascade threshold is not a number within +-1e30");
+}
+
+/** The float at most v (a threshold rounded up could reject the positive that set it). */
+float
+floatAtMost (double v)
+{
+  float f = static_cast<float> (v);
+  if (static_cast<double> (f) > v)
+    f = std::nextafter (f, -std::numeric_limits<float>::infinity ());
+  return f;
+}
+}  // namespace
+
+void
+PatchClassifier::fitCascade (const cv::Mat &samples, const std::vector<int> &labels)
+{
+  cascade_ = SoftCascade ();
+  stage_fragments_.clear ();
+  std::size_t rounds = 0;
+  for (const ClassTrees &t : trees_)
+  {
+    if (t.stumps.empty ())
+      return;  // trees deeper than stumps: no cascade
+    rounds = std::max (rounds, t.stumps.size ());
+  }
+  SoftCascade cascade;
+  for (const int e : params_.cascade_stage_ends)
+    if (e >= 1 && static_cast<std::size_t> (e) < rounds && (cascade.stage_ends.empty () || e > cascade.stage_ends.back ()))
+      cascade.stage_ends.push_back (e);
+  cascade.levels = params_.cascade_levels;
+  cascade.classes = static_cast<int> (trees_.size ());
+  if (cascade.empty ())
+    return;
+  const std::size_t stages = cascade.stage_ends.size (), levels = cascade.levels.size ();
+  cascade.thresholds.assign (levels * trees_.size () * stages, kNeverBelow);
+  std::vector<double> partial (stages);
+  for (std::size_t c = 0; c < trees_.size (); ++c)
+  {
+    const std::vector<Stump> &stumps = trees_[c].stumps;
+    std::vector<double> lowest (levels * stages, std::numeric_limits<double>::infinity ());
+    for (int i = 0; i < samples.rows; ++i)
+    {
+      if (labels[static_cast<std::size_t> (i)] != static_cast<int> (c))
+        continue;
+      const float *row = samples.ptr<float> (i);
+      double sum = 0.0;
+      std::size_t s = 0;
+      for (std::size_t r = 0; r < stumps.size (); ++r)
+      {
+        if (s < stages && r == static_cast<std::size_t> (cascade.stage_ends[s]))
+          partial[s++] = sum;
+        sum += row[stumps[r].feature] <= stumps[r].threshold ? stumps[r].left : stumps[r].right;
+      }
+      for (; s < stages; ++s)  // a class with fewer rounds than a stage end: its final sum
+        partial[s] = sum;
+      // The positive is kept at every level its confidence reaches.
+      const double confidence = 1.0 / (1.0 + std::exp (-2.0 * static_cast<double> (static_cast<float> (sum))));
+      for (std::size_t l = 0; l < levels; ++l)
+        if (confidence >= static_cast<double> (cascade.levels[l]))
+          for (std::size_t k = 0; k < stages; ++k)
+            lowest[l * stages + k] = std::min (lowest[l * stages + k], partial[k]);
+    }
+    for (std::size_t l = 0; l < levels; ++l)
+      for (std::size_t k = 0; k < stages; ++k)
+      {
+        const double v = lowest[l * stages + k];
+        if (std::isfinite (v))
+          cascade.thresholds[(l * trees_.size () + c) * stages + k] =
+              std::max (kNeverBelow, floatAtMost (v));
+      }
+  }
+  cascade_ = std::move (cascade);
+}
+
+void
+PatchClassifier::prepareCascade ()
+{
+  stage_fragments_.clear ();
+  if (cascade_.empty ())
+    return;
+  std::size_t rounds = 0;
+  for (const ClassTrees &t : trees_)
+  {
+    if (t.stumps.empty ())
+      throw ModelError ("a cascade over trees deeper than stumps");
+    rounds = std::max (rounds, t.stumps.size ());
+  }
+  checkCascade (cascade_, trees_.size (), rounds);
+  const std::size_t fragments = dictionary_.size (), stages = cascade_.stage_ends.size ();
+  std::vector<char> done (fragments, 0);
+  std::vector<std::vector<int>> lists (stages + 1);
+  for (std::size_t s = 0; s <= stages; ++s)
+  {
+    const std::size_t begin = s == 0 ? 0 : static_cast<std::size_t> (cascade_.stage_ends[s - 1]);
+    const std::size_t end = s < stages ? static_cast<std::size_t> (cascade_.stage_ends[s]) : rounds;
+    for (const ClassTrees &t : trees_)
+      for (std::size_t r = begin; r < end && r < t.stumps.size (); ++r)
+      {
+        const std::size_t f = static_cast<std::size_t> (t.stumps[r].feature);
+        if (f < fragments && !done[f])  // auxiliary features are given, not computed
+        {
+          done[f] = 1;
+          lists[s].push_back (static_cast<int> (f));
+        }
+      }
+    std::sort (lists[s].begin (), lists[s].end ());
+  }
+  stage_fragments_ = std::move (lists);
 }
 
 void
@@ -676,6 +928,24 @@ PatchClassifier::save (const std::string &path, const nlohmann::json &metadata) 
     fs << "}";
   }
   fs << "]";
+  if (!cascade_.empty ())
+  {
+    // Doubles: each float threshold reads back exactly.
+    fs << "cascade" << "{";
+    fs << "stage_ends" << "[:";
+    for (const int e : cascade_.stage_ends)
+      fs << e;
+    fs << "]";
+    fs << "levels" << "[:";
+    for (const float l : cascade_.levels)
+      fs << static_cast<double> (l);
+    fs << "]";
+    fs << "thresholds" << "[:";
+    for (const float t : cascade_.thresholds)
+      fs << static_cast<double> (t);
+    fs << "]";
+    fs << "}";
+  }
   // Written last: a file cut anywhere before it is recognisably truncated.
   fs.write ("end", std::string (kFormatName));
   agex::writeFileAtomic (path, fs.releaseAndGetString ());
@@ -842,6 +1112,40 @@ PatchClassifier::load (const std::string &path)
       }
     }
     model.prepare ();
+    const cv::FileNode cascade = fs["cascade"];
+    if (!cascade.empty ())
+    {
+      if (!cascade.isMap ())
+        throw ModelError ("invalid cascade");
+      const auto numbers = [&cascade] (const char *key, std::size_t most) {
+        const cv::FileNode seq = cascade[key];
+        if (seq.empty () || !seq.isSeq () || seq.size () > most)
+          throw ModelError (std::string ("cascade.") + key + ": need 1 to " + std::to_string (most) + " numbers");
+        std::vector<double> values;
+        for (cv::FileNodeIterator it = seq.begin (); it != seq.end (); ++it)
+        {
+          if (!(*it).isReal () && !(*it).isInt ())
+            throw ModelError (std::string ("cascade.") + key + ": not a number");
+          values.push_back (static_cast<double> (*it));
+        }
+        return values;
+      };
+      for (const double e : numbers ("stage_ends", kMaxCascadeStages))
+      {
+        if (!(e >= 1.0 && e <= 1e6) || e != std::floor (e))
+          throw ModelError ("cascade.stage_ends: not a round count");
+        model.cascade_.stage_ends.push_back (static_cast<int> (e));
+      }
+      for (const double l : numbers ("levels", kMaxCascadeLevels))
+        model.cascade_.levels.push_back (static_cast<float> (std::max (-2.0, std::min (2.0, l))));
+      const std::size_t expected =
+          model.cascade_.levels.size () * static_cast<std::size_t> (classes) * model.cascade_.stage_ends.size ();
+      for (const double t : numbers ("thresholds", expected))
+        model.cascade_.thresholds.push_back (
+            std::fabs (t) <= 1e30 ? static_cast<float> (t) : std::numeric_limits<float>::infinity ());
+      model.cascade_.classes = classes;
+      model.prepareCascade ();
+    }
   }
   catch (const ModelError &e)
   {

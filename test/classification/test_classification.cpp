@@ -727,6 +727,16 @@ TEST (PatchClassifier, BadInputThrows)
   bad = params;
   bad.weight_trim_rate = 1.5;
   EXPECT_THROW (c.train (set.patches, set.labels, 2, bad), std::invalid_argument);
+  bad = params;
+  bad.cascade_levels = {0.2f, 0.1f};  // not increasing
+  EXPECT_THROW (c.train (set.patches, set.labels, 2, bad), std::invalid_argument);
+  bad.cascade_levels = {1.f};
+  EXPECT_THROW (c.train (set.patches, set.labels, 2, bad), std::invalid_argument);
+  bad = params;
+  bad.cascade_stage_ends = {0, 4};
+  EXPECT_THROW (c.train (set.patches, set.labels, 2, bad), std::invalid_argument);
+  bad.cascade_stage_ends.assign (33, 1);
+  EXPECT_THROW (c.train (set.patches, set.labels, 2, bad), std::invalid_argument);
   EXPECT_FALSE (c.trained ());
 
   float m[2], conf[2];
@@ -734,6 +744,97 @@ TEST (PatchClassifier, BadInputThrows)
   TempDir dir;
   EXPECT_THROW (c.save (dir.file ("untrained.yml"), nlohmann::json ()), std::logic_error);
   EXPECT_THROW (trainedClassifier ().classify (flatPatch (21), m, conf), std::invalid_argument);
+}
+
+TEST (SoftCascade, KeepsEveryTrainingPositiveOfItsLevelAndRejectsBackground)
+{
+  const SyntheticSet train = syntheticSet (150, 300, 1);
+  const PatchClassifier &classifier = trainedClassifier ();  // trained on the same set
+  const agex::SoftCascade &cascade = classifier.cascade ();
+  ASSERT_FALSE (cascade.empty ());
+  // smallParams: 60 rounds, so the stage ends below 60 remain.
+  EXPECT_EQ (cascade.stage_ends, (std::vector<int>{4, 8, 16, 32}));
+  EXPECT_EQ (cascade.levels, PatchClassifierParams ().cascade_levels);
+  EXPECT_EQ (cascade.levelFor (0.f), -1);
+  EXPECT_EQ (cascade.levelFor (0.019f), -1);
+  EXPECT_EQ (cascade.levelFor (0.05f), 1);
+  EXPECT_EQ (cascade.levelFor (0.5f), static_cast<int> (cascade.levels.size ()) - 1);
+
+  float full_m[2], full_c[2], m[2], conf[2];
+  for (std::size_t l = 0; l < cascade.levels.size (); ++l)
+  {
+    const float level = cascade.levels[l];
+    int checked = 0;
+    for (std::size_t i = 0; i < train.patches.size (); ++i)
+    {
+      const int label = train.labels[i];
+      classifier.classify (train.patches[i], full_m, full_c);
+      if (label < 0 || full_c[label] < level)
+        continue;
+      ++checked;
+      ASSERT_TRUE (classifier.classifyCascade (train.patches[i], nullptr, level, m, conf))
+          << "training positive " << i << " of class " << label << " (confidence " << full_c[label]
+          << ") rejected at level " << level;
+      for (int c = 0; c < 2; ++c)
+        ASSERT_EQ (agex_test::bits (m[c]), agex_test::bits (full_m[c]));
+    }
+    EXPECT_GT (checked, 250) << "level " << level;
+  }
+
+  // Held out: a patch the cascade keeps gets exactly classify ()'s values; background is
+  // mostly rejected; held-out positives mostly kept.
+  const SyntheticSet test = syntheticSet (100, 200, 2);
+  int rejected_background = 0, background = 0, kept_positive = 0, positive = 0;
+  for (std::size_t i = 0; i < test.patches.size (); ++i)
+  {
+    classifier.classify (test.patches[i], full_m, full_c);
+    const bool kept = classifier.classifyCascade (test.patches[i], nullptr, 0.1f, m, conf);
+    if (kept)
+      for (int c = 0; c < 2; ++c)
+      {
+        ASSERT_EQ (agex_test::bits (m[c]), agex_test::bits (full_m[c]));
+        ASSERT_EQ (agex_test::bits (conf[c]), agex_test::bits (full_c[c]));
+      }
+    // Off (below every level): classify () itself.
+    ASSERT_TRUE (classifier.classifyCascade (test.patches[i], nullptr, 0.f, m, conf));
+    ASSERT_EQ (agex_test::bits (m[0]), agex_test::bits (full_m[0]));
+    if (test.labels[i] < 0)
+    {
+      ++background;
+      rejected_background += !kept;
+    }
+    else
+    {
+      ++positive;
+      kept_positive += kept;
+    }
+  }
+  std::cout << "[ info ] cascade at 0.1: " << rejected_background << " of " << background
+            << " background patches rejected, " << kept_positive << " of " << positive << " positives kept" << std::endl;
+  EXPECT_GT (rejected_background, background / 2);
+  EXPECT_GT (kept_positive, positive * 9 / 10);
+}
+
+TEST (SoftCascade, NoCascadeWithoutLevelsOrStages)
+{
+  const SyntheticSet train = syntheticSet (40, 80, 1);
+  PatchClassifierParams params = smallParams ();
+  params.cascade_levels.clear ();
+  PatchClassifier c;
+  c.train (train.patches, train.labels, 2, params);
+  EXPECT_TRUE (c.cascade ().empty ());
+  params = smallParams ();
+  params.cascade_stage_ends = {60, 100};  // none below the 60 rounds
+  c.train (train.patches, train.labels, 2, params);
+  EXPECT_TRUE (c.cascade ().empty ());
+  float m[2], conf[2], full_m[2];
+  for (const DepthPatch &p : train.patches)
+  {
+    c.classify (p, full_m, nullptr);
+    ASSERT_TRUE (c.classifyCascade (p, nullptr, 0.5f, m, conf));
+    ASSERT_EQ (agex_test::bits (m[1]), agex_test::bits (full_m[1]));
+  }
+  EXPECT_THROW (c.classifyCascade (flatPatch (21), nullptr, 0.5f, m, conf), std::invalid_argument);
 }
 
 // ---------------------------------------------------------------------------------------
@@ -772,6 +873,12 @@ TEST (ModelFile, RoundTripGivesIdenticalMarginsAndMetadata)
   EXPECT_EQ (loaded.params ().dictionary.fragments_per_class, 40);
   EXPECT_EQ (loaded.params ().dictionary.seed, classifier.params ().dictionary.seed);
   EXPECT_EQ (loaded.usedFragments (), classifier.usedFragments ());
+  ASSERT_FALSE (loaded.cascade ().empty ());
+  EXPECT_EQ (loaded.cascade ().stage_ends, classifier.cascade ().stage_ends);
+  EXPECT_EQ (loaded.cascade ().levels, classifier.cascade ().levels);
+  ASSERT_EQ (loaded.cascade ().thresholds.size (), classifier.cascade ().thresholds.size ());
+  for (std::size_t i = 0; i < loaded.cascade ().thresholds.size (); ++i)
+    ASSERT_EQ (agex_test::bits (loaded.cascade ().thresholds[i]), agex_test::bits (classifier.cascade ().thresholds[i]));
   ASSERT_EQ (loaded.dictionary ().size (), classifier.dictionary ().size ());
   for (std::size_t i = 0; i < loaded.dictionary ().size (); ++i)
   {
@@ -792,6 +899,9 @@ TEST (ModelFile, RoundTripGivesIdenticalMarginsAndMetadata)
       ASSERT_EQ (agex_test::bits (m1[c]), agex_test::bits (m2[c]));
       ASSERT_EQ (agex_test::bits (c1[c]), agex_test::bits (c2[c]));
     }
+    const bool kept = classifier.classifyCascade (p, nullptr, 0.05f, m1, c1);
+    ASSERT_EQ (loaded.classifyCascade (p, nullptr, 0.05f, m2, c2), kept);
+    ASSERT_EQ (agex_test::bits (m1[0]), agex_test::bits (m2[0]));
   }
 
   // Saving the loaded model gives the same file, byte for byte.
@@ -924,6 +1034,43 @@ TEST (ModelFile, DamagedModelsThrowModelErrorNamingTheFile)
   expectModelError (badvar, "booster 0");
   agex_test::writeAll (badvar, replaceOnce (text, "classes: 2", "classes: 3"));
   expectModelError (badvar, "boosters");
+
+  // A damaged soft cascade (the trained one: stage ends 4, 8, 16, 32 of 60 rounds).
+  const std::string casc = dir.file ("cascade.yml");
+  const std::string ends = "stage_ends: [ 4, 8, 16, 32 ]";
+  ASSERT_NE (text.find (ends), std::string::npos);
+  for (const std::string &bad : {"stage_ends: [ 8, 4, 16, 32 ]", "stage_ends: [ 4, 8, 16, 60 ]",
+                                 "stage_ends: [ 4, 8, 16, 32.5 ]", "stage_ends: [ 4, x, 16, 32 ]",
+                                 "stage_ends: []", "stage_ends: 4"})
+  {
+    agex_test::writeAll (casc, replaceOnce (text, ends, bad));
+    expectModelError (casc, "cascade");
+  }
+  std::string many = "stage_ends: [ 1";
+  for (int e = 2; e <= 40; ++e)
+    many += ", " + std::to_string (e);
+  agex_test::writeAll (casc, replaceOnce (text, ends, many + " ]"));
+  expectModelError (casc, "cascade");
+  const std::size_t first = text.find ("thresholds: [ ") + 14;
+  const std::string value = text.substr (first, text.find (',', first) - first);
+  for (const std::string &bad : {"1e+40", ".nan", "x"})
+  {
+    std::string t = text;
+    t.replace (first, value.size (), bad);
+    agex_test::writeAll (casc, t);
+    expectModelError (casc, "cascade");
+  }
+  std::string fewer = text;
+  fewer.erase (first, value.size () + 2);  // one threshold short
+  agex_test::writeAll (casc, fewer);
+  expectModelError (casc, "cascade");
+  const std::size_t level = text.find ("levels: [ ") + 10;
+  std::string bad_level = text;
+  bad_level.replace (level, text.find (',', level) - level, "1.5");
+  agex_test::writeAll (casc, bad_level);
+  expectModelError (casc, "cascade");
+  agex_test::writeAll (casc, replaceOnce (text, "cascade:\n", "cascade: 3\nold_cascade:\n"));
+  expectModelError (casc, "cascade");
 
   // Metadata that is not JSON.
   const std::string meta = dir.file ("meta.yml");

@@ -142,6 +142,7 @@ benchDataset (const std::string &spec, bool keyframes_only, const LoadedDetector
           {"detector_mode", loaded.mode_name},
           {"forest", loaded.forest ? loaded.files.back () : std::string ()},
           {"forest_stride", loaded.forest_stride},
+          {"cascade_min_confidence", loaded.cascade_min_confidence},
           {"frames", clouds.size ()},
           {"width", clouds.front ()->width},
           {"height", clouds.front ()->height},

@@ -30,6 +30,13 @@ detectorOptionsDescription (DetectorChoice &choice, const std::string &model_def
          throw std::runtime_error ("--forest-stride must lie in [0, 8]");
      }),
      "forest: one evaluated pixel per stride x stride cell (0: by the focal length, 2 at 640x480)")
+    ("cascade-min-confidence",
+     po::value (&choice.cascade_min_confidence)->default_value (choice.cascade_min_confidence)->notifier ([] (float v) {
+       if (!(v >= 0.f && v < 1.f))
+         throw std::runtime_error ("--cascade-min-confidence must lie in [0, 1)");
+     }),
+     "the classifier's soft cascade drops candidates it rejects at this confidence without computing all their "
+     "features (0: every candidate classified in full; models trained before the cascade have none)")
     ("forest-input", po::value (&choice.forest_input)->default_value (choice.forest_input)->notifier ([] (const std::string &v) {
        ForestInput input;
        if (!parseForestInput (v, input))
@@ -54,6 +61,7 @@ LoadedDetector::configure (BodyPartDetector<pcl::PointXYZ> &detector) const
   detector.setForest (forest);
   detector.setMode (mode);
   detector.setForestStride (forest_stride);
+  detector.setCascadeMinConfidence (cascade_min_confidence);
   detector.setForestParts (forest_parts);
 }
 
@@ -88,6 +96,7 @@ loadDetector (const DetectorChoice &choice, DetectorKind kind)
                                 " was trained with (" + loaded.model->settings ().forest_file + ")");
   }
   loaded.forest_stride = choice.forest_stride;
+  loaded.cascade_min_confidence = choice.cascade_min_confidence;
   if (!parseForestInput (choice.forest_input, loaded.forest_parts.input))
     throw std::runtime_error ("--forest-input must be automatic, persons or meshes, not '" + choice.forest_input + "'");
   if (!parsePartProposals (choice.forest_parts, loaded.forest_parts.proposals))

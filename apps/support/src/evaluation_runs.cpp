@@ -261,7 +261,8 @@ reportDetection (const DetectionTally &tally, const nlohmann::json &about, const
 }
 
 /** The keys of a detect report that say what was evaluated how: equal in every share. */
-const char *const kRunKeys[] = {"dataset", "model", "detector_mode", "forest", "radius_m", "min_iou"};
+const char *const kRunKeys[] = {"dataset", "model", "detector_mode", "forest", "radius_m", "min_iou",
+                                "cascade_min_confidence"};
 }  // namespace
 
 int
@@ -269,7 +270,8 @@ evaluateDetection (const DatasetSelection &selection, const LoadedDetector &load
                    const std::string &json_path, const std::string &plots_dir, ProcessGroup &group, const Shard &shard)
 {
   nlohmann::json about = {{"dataset", selection.dataset.directory ()}, {"model", loaded.files.front ()},
-                          {"detector_mode", loaded.mode_name}};
+                          {"detector_mode", loaded.mode_name},
+                          {"cascade_min_confidence", loaded.cascade_min_confidence}};
   if (loaded.files.size () > 1)
     about["forest"] = loaded.files.back ();
   if (loaded.mode == DetectorMode::Forest)

@@ -12,6 +12,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -88,6 +89,33 @@ public:
   /** \brief Only the features listed in which (fragment indices; others are untouched).
     * \throws std::invalid_argument if patch.size != patchSize () or an index is out of range */
   void computeFeatures (const agex::DepthPatch &patch, const std::vector<int> &which, float *features) const;
+
+  /** \brief A patch quantised once (integral images and packed cells) for several
+    * computeFeatures calls over it: a soft cascade computes a patch's features stage by
+    * stage and stops when it rejects the patch. One per thread; reusable for the next patch. */
+  class PreparedPatch
+  {
+  public:
+    PreparedPatch ();
+    ~PreparedPatch ();
+    PreparedPatch (PreparedPatch &&) noexcept;
+    PreparedPatch &operator= (PreparedPatch &&) noexcept;
+    /** Cells per side of the patch prepared (0: none yet). */
+    int size () const;
+
+  private:
+    friend class FragmentDictionary;
+    struct Impl;
+    std::unique_ptr<Impl> impl_;
+  };
+  /** \brief Quantises patch into prepared (replacing what it held).
+    * \throws std::invalid_argument if patch.size != patchSize () */
+  void prepare (const agex::DepthPatch &patch, PreparedPatch &prepared) const;
+  /** \brief features[which[i]] for i < count, on a prepared patch; the same values as
+    * computeFeatures on the patch. Indices are not checked here (a caller's hot loop):
+    * each must be < size ().
+    * \throws std::invalid_argument if prepared holds no patch of patchSize () */
+  void computeFeatures (const PreparedPatch &prepared, const int *which, std::size_t count, float *features) const;
 
   /** \brief The feature kernels this build offers on this processor, fastest first:
     * "avx-vnni", "avx2", "sse2" (x86-64 builds with GCC) and "generic" (plain C++, always).

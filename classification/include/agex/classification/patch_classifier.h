@@ -22,6 +22,37 @@ struct PatchClassifierParams
   FragmentDictionaryParams dictionary;
   int weak_count = 150;            ///< GentleBoost rounds per class (decision stumps: max depth 1)
   double weight_trim_rate = 0.95;  ///< cv::ml::Boost weight trimming; 0 or 1: none
+  /** Soft cascade (PatchClassifier::classifyCascade): the rounds after which a patch may be
+    * rejected (those below weak_count are kept; none: no cascade) ... */
+  std::vector<int> cascade_stage_ends = {4, 8, 16, 32, 64, 128};
+  /** ... and the minimum confidences its rejection thresholds are fitted for (each in (0, 1),
+    * increasing; empty: no cascade). */
+  std::vector<float> cascade_levels = {0.02f, 0.05f, 0.1f, 0.2f};
+};
+
+/** \brief A soft cascade over a classifier's boosted stumps, fitted by direct backward
+  * pruning (Zhang & Viola, NIPS 2007) on the training positives.
+  *
+  * The stumps of all classes are summed round by round (round r: stump r of every class).
+  * After round stage_ends[s] a patch is rejected when for every class c its partial margin
+  * is below threshold (l, c, s): the smallest partial margin there of the class's training
+  * positives whose final margin reaches level l's confidence. So no such training positive
+  * is ever rejected, and a patch is rejected only when no class is on a path any of them
+  * took. */
+struct SoftCascade
+{
+  std::vector<int> stage_ends;    ///< rounds, increasing, each at least 1
+  std::vector<float> levels;      ///< minimum confidences, increasing, in (0, 1)
+  std::vector<float> thresholds;  ///< [level][class][stage], partial margins (-1e30: never below)
+  int classes = 0;
+
+  bool empty () const { return levels.empty () || stage_ends.empty (); }
+  float threshold (std::size_t level, std::size_t cls, std::size_t stage) const
+  {
+    return thresholds[(level * static_cast<std::size_t> (classes) + cls) * stage_ends.size () + stage];
+  }
+  /** The largest level at most min_confidence, or -1 (no cascade at that confidence). */
+  int levelFor (float min_confidence) const;
 };
 
 /** The patch geometry a model was trained on; a detector must cut its patches the same way
@@ -110,6 +141,17 @@ public:
     * auxiliaryNames ().size () values (may be null when there are none).
     * \throws std::invalid_argument if auxiliary is null but features are needed */
   void classify (const agex::DepthPatch &patch, const float *auxiliary, float *margins, float *confidences) const;
+  /** \brief classify () through the soft cascade (SoftCascade) fitted for the largest level
+    * at most min_confidence: false if the patch was rejected early (margins and confidences
+    * then hold the partial margins where it stopped; a caller drops the patch). A patch not
+    * rejected gets exactly classify ()'s values, and is the only one whose features are all
+    * computed. Without a cascade (an older model, min_confidence below every level, trees
+    * deeper than stumps) this is classify () and returns true.
+    * auxiliary may be null only for a patch-only classifier. */
+  bool classifyCascade (const agex::DepthPatch &patch, const float *auxiliary, float min_confidence, float *margins,
+                        float *confidences) const;
+  /** The soft cascade (empty for models trained before it, or without one). */
+  const SoftCascade &cascade () const { return cascade_; }
 
   /** \brief Writes the model (format name, version, patch geometry, training parameters,
     * metadata, dictionary, boosters) to path atomically (agex::writeFileAtomic).
@@ -175,11 +217,22 @@ private:
   /** Validates the boosters against the dictionary and flattens them; fills trees_ and
     * used_fragments_. \throws ModelError (message without the file name) */
   void prepare ();
+  /** Fits cascade_ to the training features (rows of samples) and labels, params_'s stages
+    * and levels; leaves it empty when the trees are not all stumps. */
+  void fitCascade (const cv::Mat &samples, const std::vector<int> &labels);
+  /** Per cascade stage (and one more for the rest): the fragments first used there. Fills
+    * stage_fragments_ from cascade_; \throws ModelError if the cascade does not fit. */
+  void prepareCascade ();
+  /** The features classify () computes without the cascade: all used ones. */
+  void computeAllFeatures (const agex::DepthPatch &patch, const float *auxiliary, float *features) const;
+  void checkClassifyInput (const agex::DepthPatch &patch, const float *auxiliary, const char *caller) const;
 
   FragmentDictionary dictionary_;
   std::vector<cv::Ptr<cv::ml::Boost>> boosters_;
   std::vector<ClassTrees> trees_;
   std::vector<int> used_fragments_;
+  SoftCascade cascade_;
+  std::vector<std::vector<int>> stage_fragments_;
   std::vector<std::string> auxiliary_names_;
   PatchGeometry geometry_;
   PatchClassifierParams params_;

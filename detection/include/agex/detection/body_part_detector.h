@@ -97,6 +97,17 @@ public:
   void setForestStride (int stride) { forest_stride_ = stride; }
   int getForestStride () const { return forest_stride_; }
 
+  /** \brief The classifier's soft cascade (agex::SoftCascade): candidates it rejects at this
+    * confidence are dropped without computing all their features; the others keep exactly
+    * their confidences. The cascade used is the one fitted for the largest level at most
+    * this; 0 (or a model without a cascade): every candidate is classified in full. Default
+    * kDefaultCascadeMinConfidence.
+    * \throws std::invalid_argument outside [0, 1) */
+  void setCascadeMinConfidence (float confidence);
+  float getCascadeMinConfidence () const { return cascade_min_confidence_; }
+  /** A confidence far below the detections that decide AP (doc/classifier.md). */
+  static constexpr float kDefaultCascadeMinConfidence = 0.05f;
+
   /** \brief How Forest mode labels and names parts (agex::ForestPartSettings; default: the
     * persons as segmented, PCL-style blobs at their extremities). A fused model keeps its
     * training's meshes and modes.
@@ -159,6 +170,7 @@ private:
   float fx_ = 0.f, fy_ = 0.f;
   float used_fx_ = 0.f;  ///< the focal length the last forest pass used
   int forest_stride_ = 1;
+  float cascade_min_confidence_ = kDefaultCascadeMinConfidence;
   ForestPartSettings forest_parts_;
   pcl::PointCloud<pcl::PointXYZ>::Ptr xyz_frame_;  ///< the input as XYZ, for other point types
   pcl::PointCloud<BodyPartLabelPoint> part_labels_;

@@ -21,6 +21,7 @@ struct DetectorChoice
   std::string forest;  ///< forest: our model file, a PCL tree file or a directory of them
   std::string mode;  ///< agex, fused or forest; empty: the model's own kind
   int forest_stride = 1;
+  float cascade_min_confidence = BodyPartDetector<pcl::PointXYZ>::kDefaultCascadeMinConfidence;
   std::string forest_input = "automatic";  ///< forest mode: automatic, persons or meshes (agex::ForestInput)
   std::string forest_parts = "blobs";    ///< forest mode: blobs or modes (agex::PartProposals)
 };
@@ -36,6 +37,7 @@ struct LoadedDetector
   BodyPartForest::ConstPtr forest;
   DetectorMode mode = DetectorMode::Model;
   int forest_stride = 1;
+  float cascade_min_confidence = BodyPartDetector<pcl::PointXYZ>::kDefaultCascadeMinConfidence;
   ForestPartSettings forest_parts;
   /** What names the parts: "agex", "fused", "sliding_window" (the model's kind) or "forest". */
   std::string mode_name;

@@ -130,8 +130,13 @@ agex::SlidingWindowDetector<PointT>::detect (std::vector<WindowDetection> &outpu
         return false;  // DepthPatchEstimation said why
       for (std::size_t i = 0; i < chunk->size (); ++i)
       {
-        classifier_->classify (patches[i], margins.data (), confidences.data ());
+        // Windows below the minimum confidence are dropped anyway: the classifier's soft
+        // cascade (if it has one at that confidence) may stop computing them early.
+        const bool kept = classifier_->classifyCascade (patches[i], nullptr, min_confidence_, margins.data (),
+                                                        confidences.data ());
         ++window_count_;
+        if (!kept)
+          continue;
         const int best = static_cast<int> (std::max_element (confidences.begin (), confidences.end ()) -
                                            confidences.begin ());
         if (confidences[best] < min_confidence_)

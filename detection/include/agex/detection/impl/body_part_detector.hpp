@@ -44,6 +44,15 @@ agex::BodyPartDetector<PointT>::setSettings (const DetectorSettings &settings)
 }
 
 template <typename PointT> void
+agex::BodyPartDetector<PointT>::setCascadeMinConfidence (float confidence)
+{
+  if (!(confidence >= 0.f && confidence < 1.f))
+    throw std::invalid_argument ("BodyPartDetector::setCascadeMinConfidence: " + std::to_string (confidence) +
+                                 " outside [0, 1)");
+  cascade_min_confidence_ = confidence;
+}
+
+template <typename PointT> void
 agex::BodyPartDetector<PointT>::compute (std::vector<BodyPartDetection> &detections)
 {
   detections.clear ();
@@ -249,7 +258,9 @@ agex::BodyPartDetector<PointT>::classifyFused (std::vector<BodyPartDetection> &d
   for (std::size_t i = 0; i < patches.size () && i < candidates.size (); ++i)
   {
     features.compute (candidates[i], aux.data ());
-    classifier.classify (patches[i], aux.data (), margins.data (), confidences.data ());
+    if (!classifier.classifyCascade (patches[i], aux.data (), cascade_min_confidence_, margins.data (),
+                                     confidences.data ()))
+      continue;
     const int best = static_cast<int> (std::max_element (confidences.begin (), confidences.end ()) - confidences.begin ());
     const FusedCandidate &c = candidates[i];
     BodyPartDetection d;
@@ -264,7 +275,7 @@ agex::BodyPartDetector<PointT>::classifyFused (std::vector<BodyPartDetection> &d
     d.mesh = c.mesh;
     named.push_back (d);
   }
-  patches_classified_ = named.size ();
+  patches_classified_ = std::min (patches.size (), candidates.size ());
   suppress (named, detections);
   intermediate_.ms.emplace_back ("classify", msSince (start));
 }
@@ -324,7 +335,9 @@ agex::BodyPartDetector<PointT>::classify (std::vector<BodyPartDetection> &detect
   std::vector<BodyPartDetection> candidates;
   for (std::size_t i = 0; i < patches.size () && i < prepared.interest_points.size (); ++i)
   {
-    classifier.classify (patches[i], margins.data (), confidences.data ());
+    if (!classifier.classifyCascade (patches[i], nullptr, cascade_min_confidence_, margins.data (),
+                                     confidences.data ()))
+      continue;
     const int best = static_cast<int> (std::max_element (confidences.begin (), confidences.end ()) - confidences.begin ());
     const agex::InterestPoint &p = prepared.interest_points[i];
     BodyPartDetection d;
@@ -339,7 +352,7 @@ agex::BodyPartDetector<PointT>::classify (std::vector<BodyPartDetection> &detect
     d.mesh = p.mesh;
     candidates.push_back (d);
   }
-  patches_classified_ = candidates.size ();
+  patches_classified_ = std::min (patches.size (), prepared.interest_points.size ());
   // Several extrema often sit on one part (a hand's fingers, the two sides of a head):
   // keep the most confident detection of a class within the suppression radius.
   suppress (candidates, detections);

@@ -640,7 +640,7 @@ FragmentDictionary::prepare (const agex::DepthPatch &patch, PreparedPatch &prepa
     throw std::invalid_argument ("FragmentDictionary::prepare: patch size " + std::to_string (patch.size) +
                                  ", the dictionary was built for " + std::to_string (patch_size_));
   if (!prepared.impl_)
-    prepared.impl_ = std::make_unique<PreparedPatch::Impl> ();
+    prepared.impl_.reset (new PreparedPatch::Impl);  // not value-initialised: prepare () writes what it reads
   prepared.impl_->prepared.prepare (patch);
 }
 

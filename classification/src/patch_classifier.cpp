@@ -818,10 +818,11 @@ PatchClassifier::fitCascade (const cv::Mat &samples, const std::vector<int> &lab
       }
       for (; s < stages; ++s)  // a class with fewer rounds than a stage end: its final sum
         partial[s] = sum;
-      // The positive is kept at every level its confidence reaches.
-      const double confidence = 1.0 / (1.0 + std::exp (-2.0 * static_cast<double> (static_cast<float> (sum))));
+      // The positive is kept at every level its confidence (as classify () reports it) reaches.
+      float confidence = 0.f;
+      writeOutputs (&sum, 1, nullptr, &confidence);
       for (std::size_t l = 0; l < levels; ++l)
-        if (confidence >= static_cast<double> (cascade.levels[l]))
+        if (confidence >= cascade.levels[l])
           for (std::size_t k = 0; k < stages; ++k)
             lowest[l * stages + k] = std::min (lowest[l * stages + k], partial[k]);
     }
@@ -829,6 +830,7 @@ PatchClassifier::fitCascade (const cv::Mat &samples, const std::vector<int> &lab
       for (std::size_t k = 0; k < stages; ++k)
       {
         const double v = lowest[l * stages + k];
+        // (A partial margin below -1e30 would need 1e30 / 150 per stump: none is that large.)
         if (std::isfinite (v))
           cascade.thresholds[(l * trees_.size () + c) * stages + k] =
               std::max (kNeverBelow, floatAtMost (v));
@@ -1142,10 +1144,14 @@ PatchClassifier::load (const std::string &path)
           model.cascade_.levels.size () * static_cast<std::size_t> (classes) * model.cascade_.stage_ends.size ();
       for (const double t : numbers ("thresholds", expected))
         model.cascade_.thresholds.push_back (
-            std::fabs (t) <= 1e30 ? static_cast<float> (t) : std::numeric_limits<float>::infinity ());
+            std::fabs (t) <= static_cast<double> (-kNeverBelow) ? static_cast<float> (t)
+                                                                : std::numeric_limits<float>::infinity ());
       model.cascade_.classes = classes;
       model.prepareCascade ();
     }
+    // What the model was trained with (the file keeps the cascade, not the parameters).
+    model.params_.cascade_stage_ends = model.cascade_.stage_ends;
+    model.params_.cascade_levels = model.cascade_.levels;
   }
   catch (const ModelError &e)
   {

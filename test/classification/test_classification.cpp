@@ -837,6 +837,32 @@ TEST (SoftCascade, NoCascadeWithoutLevelsOrStages)
   EXPECT_THROW (c.classifyCascade (flatPatch (21), nullptr, 0.5f, m, conf), std::invalid_argument);
 }
 
+TEST (SoftCascade, ALevelNoPositiveReachesNeverRejectsAndRoundTrips)
+{
+  // Five stumps cannot reach a confidence of 0.999999: no positive sets a threshold, so the
+  // cascade rejects nothing at that level, and the model still saves and loads unchanged.
+  const SyntheticSet train = syntheticSet (40, 80, 1);
+  PatchClassifierParams params = smallParams ();
+  params.weak_count = 5;
+  params.cascade_stage_ends = {1, 2};
+  params.cascade_levels = {0.05f, 0.999999f};
+  PatchClassifier c;
+  c.train (train.patches, train.labels, 2, params);
+  ASSERT_FALSE (c.cascade ().empty ());
+  for (std::size_t k = 0; k < 2 * 2; ++k)  // level 1: both classes, both stages
+    EXPECT_EQ (c.cascade ().threshold (1, k / 2, k % 2), -1e30f);
+  float m[2], conf[2];
+  for (const DepthPatch &p : train.patches)
+    ASSERT_TRUE (c.classifyCascade (p, nullptr, 0.999999f, m, conf));
+  TempDir dir;
+  c.save (dir.file ("a.yml"), nlohmann::json ());
+  const PatchClassifier loaded = PatchClassifier::load (dir.file ("a.yml"));
+  EXPECT_EQ (loaded.params ().cascade_levels, params.cascade_levels);
+  EXPECT_EQ (loaded.params ().cascade_stage_ends, params.cascade_stage_ends);
+  loaded.save (dir.file ("b.yml"), nlohmann::json ());
+  EXPECT_EQ (agex_test::readAll (dir.file ("a.yml")), agex_test::readAll (dir.file ("b.yml")));
+}
+
 // ---------------------------------------------------------------------------------------
 // Model files
 

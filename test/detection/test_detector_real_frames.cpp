@@ -9,6 +9,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <limits>
 #include <set>
 
 namespace
@@ -126,4 +128,45 @@ TEST (BodyPartDetectorWorkingDensity, DetectionsComeAtTheInputsPixelsAndWhereEve
   const agex::BodyPartDetection *every = best_head (found[0]), *working = best_head (found[1]);
   ASSERT_TRUE (every && working);
   EXPECT_LT ((every->position - working->position).norm (), 0.1f);
+}
+
+TEST (BodyPartDetectorCascade, KeepsTheConfidentDetectionsExactlyAndClassifiesAsMany)
+{
+  // The bundled Bonn frame through the bundled detector with its soft cascade off and at the
+  // default confidence: the same candidates are classified, the cascade drops some of the
+  // least confident, and every detection well above its level comes out unchanged.
+  const agex::Frame frame = agex::loadFrame (AGEX_SOURCE_DIR "/data/frames/bonn_1_002.png");
+  auto detector = agex::BodyPartDetector<pcl::PointXYZ>::fromModel (AGEX_SOURCE_DIR "/data/models/agex_bonn.yml");
+  ASSERT_FALSE (detector->getModel ()->classifier ().cascade ().empty ()) << "the bundled model has no cascade";
+  EXPECT_EQ (detector->getCascadeMinConfidence (), agex::BodyPartDetector<pcl::PointXYZ>::kDefaultCascadeMinConfidence);
+  EXPECT_THROW (detector->setCascadeMinConfidence (1.f), std::invalid_argument);
+  EXPECT_THROW (detector->setCascadeMinConfidence (-0.1f), std::invalid_argument);
+  EXPECT_THROW (detector->setCascadeMinConfidence (std::numeric_limits<float>::quiet_NaN ()), std::invalid_argument);
+  detector->setFocalLength (static_cast<float> (frame.intrinsics.fx), static_cast<float> (frame.intrinsics.fy));
+  detector->setInputCloud (frame.cloud);
+  std::vector<agex::BodyPartDetection> found[2];
+  std::size_t classified[2];
+  for (int k = 0; k < 2; ++k)
+  {
+    detector->setCascadeMinConfidence (k == 0 ? 0.f : agex::BodyPartDetector<pcl::PointXYZ>::kDefaultCascadeMinConfidence);
+    detector->compute (found[k]);
+    classified[k] = detector->getPatchesClassified ();
+  }
+  EXPECT_EQ (classified[0], classified[1]);
+  EXPECT_GT (classified[0], 20u);
+  ASSERT_FALSE (found[1].empty ());
+  EXPECT_LT (found[1].size (), found[0].size ()) << "the cascade rejected nothing";
+  int confident = 0;
+  for (const auto &d : found[0])
+  {
+    if (d.confidence < 0.5f)
+      continue;
+    ++confident;
+    const bool kept = std::any_of (found[1].begin (), found[1].end (), [&d] (const agex::BodyPartDetection &e) {
+      return e.part == d.part && e.confidence == d.confidence && e.u == d.u && e.v == d.v;
+    });
+    EXPECT_TRUE (kept) << agex::bodyPartName (d.part) << " at " << d.u << ", " << d.v << " (confidence "
+                       << d.confidence << ") lost";
+  }
+  EXPECT_GE (confident, 3);
 }

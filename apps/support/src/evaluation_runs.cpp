@@ -422,6 +422,11 @@ compareDetectors (const DatasetSelection &selection, const std::string &agex_mod
   agex::BodyPartDetector<pcl::PointXYZ> agex_detector, sw_detector;
   agex_detector.setModel (agex_model);
   sw_detector.setModel (sw_model);
+  // Every detector classifies every candidate in full here (the sliding window has no soft
+  // cascade below its minimum confidence): the comparison is of the classifiers.
+  agex_detector.setCascadeMinConfidence (0.f);
+  if (fused_detector)
+    fused_detector->setCascadeMinConfidence (0.f);
   agex::DetectorSettings sw_settings = sw_model->settings ();
   if (window_override.stride > 0)
     sw_settings.sliding_window.stride = window_override.stride;

@@ -90,6 +90,10 @@ check "--device replay: --fps 1e-10 (overflowed the schedule)" 1 "--fps must lie
   $D --device replay:in/batch --fps 1e-10
 check "--device replay: --fps 1e-9 (31 years a frame)" 1 "--fps must lie in \\[0.1, 1000\\]" \
   $D --device replay:in/batch --fps 1e-9
+check "--cascade-min-confidence 1 (every candidate rejected)" 1 "--cascade-min-confidence must lie in \\[0, 1\\)" \
+  $D in/frame_b.png --cascade-min-confidence 1
+check "--cascade-min-confidence nan" 1 "cascade-min-confidence" \
+  $D in/frame_b.png --cascade-min-confidence nan
 
 # Reports of --shard runs whose numbers do not fit what they count, and merged results lines
 # that are not whole: each refusal names the file and the field.

@@ -39,7 +39,8 @@ struct WindowDetection
   * s * the trained extent in metres), upright (patch axes = image axes): unlike an AGEX
   * point, a window carries no orientation to normalise with. Each window is classified;
   * its most confident class and confidence make a candidate, candidates below
-  * getMinConfidence () are dropped, and non-maximum suppression per class within
+  * getMinConfidence () are dropped (with the classifier's soft cascade, if it has one there),
+  * and non-maximum suppression per class within
   * getSuppressionRadius () metres (agex::suppressNonMaxima, across scales) leaves the
   * detections, most confident first.
   *
@@ -85,7 +86,9 @@ public:
   void setSuppressionRadius (float metres) { suppression_radius_ = metres; }
   float getSuppressionRadius () const { return suppression_radius_; }
 
-  /** Windows less confident than this are not candidates (default 0: all are). */
+  /** Windows less confident than this are not candidates (default 0: all are). A classifier
+    * with a soft cascade at this confidence (PatchClassifier::classifyCascade) also drops the
+    * windows it rejects early, which may include a few that would have reached it. */
   void setMinConfidence (float confidence) { min_confidence_ = confidence; }
   float getMinConfidence () const { return min_confidence_; }
 

@@ -130,8 +130,8 @@ agex::SlidingWindowDetector<PointT>::detect (std::vector<WindowDetection> &outpu
         return false;  // DepthPatchEstimation said why
       for (std::size_t i = 0; i < chunk->size (); ++i)
       {
-        // Windows below the minimum confidence are dropped anyway: the classifier's soft
-        // cascade (if it has one at that confidence) may stop computing them early.
+        // With a minimum confidence the classifier's soft cascade (if it has one there) may
+        // stop computing a window early (PatchClassifier::classifyCascade).
         const bool kept = classifier_->classifyCascade (patches[i], nullptr, min_confidence_, margins.data (),
                                                         confidences.data ());
         ++window_count_;

@@ -169,6 +169,13 @@ checkTrainingSet (const std::vector<agex::DepthPatch> &patches, const std::vecto
     if (!(params.cascade_levels[l] > 0.f && params.cascade_levels[l] < 1.f) ||
         (l > 0 && params.cascade_levels[l] <= params.cascade_levels[l - 1]))
       throw std::invalid_argument ("PatchClassifier::train: cascade_levels must increase within (0, 1)");
+  if (params.cascade_miss_rates.size () > kMaxCascadeLevels)
+    throw std::invalid_argument ("PatchClassifier::train: at most " + std::to_string (kMaxCascadeLevels) +
+                                 " cascade miss rates");
+  for (std::size_t m = 0; m < params.cascade_miss_rates.size (); ++m)
+    if (!(params.cascade_miss_rates[m] >= 0.f && params.cascade_miss_rates[m] <= 0.5f) ||
+        (m > 0 && params.cascade_miss_rates[m] <= params.cascade_miss_rates[m - 1]))
+      throw std::invalid_argument ("PatchClassifier::train: cascade_miss_rates must increase within [0, 0.5]");
 
   TrainingSet set;
   const int n = set.size = patches.front ().size;
@@ -233,6 +240,29 @@ featureRows (const FragmentDictionary &dictionary, const std::vector<agex::Depth
     }
   });
   return samples;
+}
+
+/** \throws std::invalid_argument unless auxiliary holds `names` finite values per patch (or
+  * nothing when there are no names). */
+void
+checkAuxiliary (const std::vector<std::vector<float>> &auxiliary, std::size_t names, std::size_t patches,
+                const char *caller)
+{
+  const std::string where = std::string ("PatchClassifier::") + caller + ": ";
+  if (names > kMaxAuxiliaryFeatures)
+    throw std::invalid_argument (where + "more than " + std::to_string (kMaxAuxiliaryFeatures) + " auxiliary features");
+  if (names > 0 && auxiliary.size () != patches)
+    throw std::invalid_argument (where + std::to_string (auxiliary.size ()) + " rows of auxiliary features for " +
+                                 std::to_string (patches) + " patches");
+  for (std::size_t i = 0; i < auxiliary.size () && names > 0; ++i)
+  {
+    if (auxiliary[i].size () != names)
+      throw std::invalid_argument (where + "auxiliary row " + std::to_string (i) + " has " +
+                                   std::to_string (auxiliary[i].size ()) + " values, not " + std::to_string (names));
+    for (const float v : auxiliary[i])
+      if (!std::isfinite (v))
+        throw std::invalid_argument (where + "auxiliary row " + std::to_string (i) + " has a non-finite value");
+  }
 }
 
 /** The GentleBoost stumps of class c against everything else. */
@@ -444,23 +474,7 @@ PatchClassifier::train (const std::vector<agex::DepthPatch> &patches, const std:
                         const PatchClassifierParams &params, const std::function<void (int, int)> &progress)
 {
   const TrainingSet set = checkTrainingSet (patches, labels, classes, params);
-  if (auxiliary_names.size () > kMaxAuxiliaryFeatures)
-    throw std::invalid_argument ("PatchClassifier::train: more than " + std::to_string (kMaxAuxiliaryFeatures) +
-                                 " auxiliary features");
-  if (!auxiliary_names.empty () && auxiliary.size () != patches.size ())
-    throw std::invalid_argument ("PatchClassifier::train: " + std::to_string (auxiliary.size ()) +
-                                 " rows of auxiliary features for " + std::to_string (patches.size ()) + " patches");
-  for (std::size_t i = 0; i < auxiliary.size () && !auxiliary_names.empty (); ++i)
-  {
-    if (auxiliary[i].size () != auxiliary_names.size ())
-      throw std::invalid_argument ("PatchClassifier::train: auxiliary row " + std::to_string (i) + " has " +
-                                   std::to_string (auxiliary[i].size ()) + " values, not " +
-                                   std::to_string (auxiliary_names.size ()));
-    for (const float v : auxiliary[i])
-      if (!std::isfinite (v))
-        throw std::invalid_argument ("PatchClassifier::train: auxiliary row " + std::to_string (i) +
-                                     " has a non-finite value");
-  }
+  checkAuxiliary (auxiliary, auxiliary_names.size (), patches.size (), "train");
   FragmentDictionary dictionary;
   dictionary.build (set.positives, params.dictionary);
   const cv::Mat samples = featureRows (dictionary, patches, auxiliary, auxiliary_names.size ());
@@ -479,7 +493,7 @@ PatchClassifier::train (const std::vector<agex::DepthPatch> &patches, const std:
   try
   {
     trained.prepare ();
-    trained.fitCascade (samples, labels);
+    trained.fitCascadeToRows (samples, labels);
     trained.prepareCascade ();
   }
   catch (const ModelError &e)
@@ -673,10 +687,11 @@ PatchClassifier::classify (const agex::DepthPatch &patch, const float *auxiliary
 
 bool
 PatchClassifier::classifyCascade (const agex::DepthPatch &patch, const float *auxiliary, float min_confidence,
-                                  float *margins, float *confidences) const
+                                  float *margins, float *confidences, float max_miss_rate) const
 {
   const int level = stage_fragments_.empty () ? -1 : cascade_.levelFor (min_confidence);
-  if (level < 0)
+  const int rate = stage_fragments_.empty () ? -1 : cascade_.rateFor (max_miss_rate);
+  if (level < 0 || rate < 0)
   {
     classify (patch, auxiliary, margins, confidences);
     return true;
@@ -713,7 +728,8 @@ PatchClassifier::classifyCascade (const agex::DepthPatch &patch, const float *au
         sum += features[st.feature] <= st.threshold ? st.left : st.right;
       }
       sums[c] = sum;
-      alive = alive || sum >= static_cast<double> (cascade_.threshold (static_cast<std::size_t> (level), c, s));
+      alive = alive || sum >= static_cast<double> (cascade_.threshold (static_cast<std::size_t> (rate),
+                                                                       static_cast<std::size_t> (level), c, s));
     }
     round = end;
     if (!alive)
@@ -724,6 +740,16 @@ PatchClassifier::classifyCascade (const agex::DepthPatch &patch, const float *au
   }
   writeOutputs (sums, classes, margins, confidences);
   return true;
+}
+
+int
+SoftCascade::rateFor (float max_miss_rate) const
+{
+  int found = -1;
+  for (std::size_t m = 0; m < miss_rates.size () && !stage_ends.empty () && !levels.empty (); ++m)
+    if (miss_rates[m] <= max_miss_rate)
+      found = static_cast<int> (m);
+  return found;
 }
 
 int
@@ -757,9 +783,16 @@ checkCascade (const SoftCascade &cascade, std::size_t classes, std::size_t round
   for (std::size_t l = 0; l < cascade.levels.size (); ++l)
     if (!(cascade.levels[l] > 0.f && cascade.levels[l] < 1.f) || (l > 0 && cascade.levels[l] <= cascade.levels[l - 1]))
       throw ModelError ("the cascade's levels must increase within (0, 1)");
+  if (cascade.miss_rates.empty () || cascade.miss_rates.size () > kMaxCascadeLevels)
+    throw ModelError ("the cascade needs 1 to " + std::to_string (kMaxCascadeLevels) + " miss rates");
+  for (std::size_t m = 0; m < cascade.miss_rates.size (); ++m)
+    if (!(cascade.miss_rates[m] >= 0.f && cascade.miss_rates[m] <= 0.5f) ||
+        (m > 0 && cascade.miss_rates[m] <= cascade.miss_rates[m - 1]))
+      throw ModelError ("the cascade's miss rates must increase within [0, 0.5]");
   if (cascade.classes != static_cast<int> (classes) ||
-      cascade.thresholds.size () != cascade.levels.size () * classes * cascade.stage_ends.size ())
-    throw ModelError ("the cascade needs levels x classes x stages thresholds");
+      cascade.thresholds.size () !=
+          cascade.miss_rates.size () * cascade.levels.size () * classes * cascade.stage_ends.size ())
+    throw ModelError ("the cascade needs miss rates x levels x classes x stages thresholds");
   for (const float t : cascade.thresholds)
     if (!(std::fabs (t) <= -kNeverBelow))
       throw ModelError ("a cascade threshold is not a number within +-1e30");
@@ -777,7 +810,7 @@ floatAtMost (double v)
 }  // namespace
 
 void
-PatchClassifier::fitCascade (const cv::Mat &samples, const std::vector<int> &labels)
+PatchClassifier::fitCascadeToRows (const cv::Mat &samples, const std::vector<int> &labels)
 {
   cascade_ = SoftCascade ();
   stage_fragments_.clear ();
@@ -793,16 +826,20 @@ PatchClassifier::fitCascade (const cv::Mat &samples, const std::vector<int> &lab
     if (e >= 1 && static_cast<std::size_t> (e) < rounds && (cascade.stage_ends.empty () || e > cascade.stage_ends.back ()))
       cascade.stage_ends.push_back (e);
   cascade.levels = params_.cascade_levels;
+  cascade.miss_rates = params_.cascade_miss_rates;
   cascade.classes = static_cast<int> (trees_.size ());
   if (cascade.empty ())
     return;
   const std::size_t stages = cascade.stage_ends.size (), levels = cascade.levels.size ();
-  cascade.thresholds.assign (levels * trees_.size () * stages, kNeverBelow);
-  std::vector<double> partial (stages);
-  for (std::size_t c = 0; c < trees_.size (); ++c)
+  const std::size_t classes = trees_.size ();
+  cascade.thresholds.assign (cascade.miss_rates.size () * levels * classes * stages, kNeverBelow);
+  for (std::size_t c = 0; c < classes; ++c)
   {
+    // Each positive's partial margins at the stage ends, and its confidence as classify ()
+    // reports it.
     const std::vector<Stump> &stumps = trees_[c].stumps;
-    std::vector<double> lowest (levels * stages, std::numeric_limits<double>::infinity ());
+    std::vector<double> partials;  // positive-major: stages values each
+    std::vector<float> confidences;
     for (int i = 0; i < samples.rows; ++i)
     {
       if (labels[static_cast<std::size_t> (i)] != static_cast<int> (c))
@@ -813,30 +850,106 @@ PatchClassifier::fitCascade (const cv::Mat &samples, const std::vector<int> &lab
       for (std::size_t r = 0; r < stumps.size (); ++r)
       {
         if (s < stages && r == static_cast<std::size_t> (cascade.stage_ends[s]))
-          partial[s++] = sum;
+        {
+          partials.push_back (sum);
+          ++s;
+        }
         sum += row[stumps[r].feature] <= stumps[r].threshold ? stumps[r].left : stumps[r].right;
       }
       for (; s < stages; ++s)  // a class with fewer rounds than a stage end: its final sum
-        partial[s] = sum;
-      // The positive is kept at every level its confidence (as classify () reports it) reaches.
+        partials.push_back (sum);
       float confidence = 0.f;
       writeOutputs (&sum, 1, nullptr, &confidence);
-      for (std::size_t l = 0; l < levels; ++l)
-        if (confidence >= cascade.levels[l])
-          for (std::size_t k = 0; k < stages; ++k)
-            lowest[l * stages + k] = std::min (lowest[l * stages + k], partial[k]);
+      confidences.push_back (confidence);
     }
     for (std::size_t l = 0; l < levels; ++l)
-      for (std::size_t k = 0; k < stages; ++k)
+    {
+      std::vector<std::size_t> reaching;  // the positives kept at this level
+      for (std::size_t i = 0; i < confidences.size (); ++i)
+        if (confidences[i] >= cascade.levels[l])
+          reaching.push_back (i);
+      for (std::size_t m = 0; m < cascade.miss_rates.size (); ++m)
       {
-        const double v = lowest[l * stages + k];
-        // (A partial margin below -1e30 would need 1e30 / 150 per stump: none is that large.)
-        if (std::isfinite (v))
-          cascade.thresholds[(l * trees_.size () + c) * stages + k] =
-              std::max (kNeverBelow, floatAtMost (v));
+        // Each stage rejects the lowest (rate / stages) of the positives the level keeps
+        // (ties stay), at rate 0 none: its threshold is the lowest survivor's partial margin.
+        const std::size_t per_stage = static_cast<std::size_t> (
+            std::floor (static_cast<double> (cascade.miss_rates[m]) * static_cast<double> (reaching.size ()) /
+                        static_cast<double> (stages)));
+        std::vector<std::size_t> alive = reaching;
+        std::vector<double> values;
+        for (std::size_t k = 0; k < stages && !alive.empty (); ++k)
+        {
+          values.clear ();
+          for (const std::size_t i : alive)
+            values.push_back (partials[i * stages + k]);
+          const std::size_t cut = std::min (per_stage, values.size () - 1);
+          std::nth_element (values.begin (), values.begin () + static_cast<std::ptrdiff_t> (cut), values.end ());
+          const float threshold = std::max (kNeverBelow, floatAtMost (values[cut]));
+          // (A partial margin below -1e30 would need 1e30 / 150 per stump: none is that large.)
+          cascade.thresholds[((m * levels + l) * classes + c) * stages + k] = threshold;
+          std::vector<std::size_t> kept;
+          for (const std::size_t i : alive)
+            if (partials[i * stages + k] >= static_cast<double> (threshold))
+              kept.push_back (i);
+          alive.swap (kept);
+        }
       }
+    }
   }
   cascade_ = std::move (cascade);
+}
+
+void
+PatchClassifier::fitCascade (const std::vector<agex::DepthPatch> &patches,
+                             const std::vector<std::vector<float>> &auxiliary, const std::vector<int> &labels,
+                             const std::vector<int> &stage_ends, const std::vector<float> &levels,
+                             const std::vector<float> &miss_rates)
+{
+  if (!trained ())
+    throw std::logic_error ("PatchClassifier::fitCascade: the classifier is not trained");
+  PatchClassifierParams params = params_;
+  params.cascade_stage_ends = stage_ends;
+  params.cascade_levels = levels;
+  params.cascade_miss_rates = miss_rates;
+  checkTrainingSet (patches, labels, classes (), params);
+  if (patches.front ().size != geometry_.size)
+    throw std::invalid_argument ("PatchClassifier::fitCascade: patch size " + std::to_string (patches.front ().size) +
+                                 ", the model was trained on " + std::to_string (geometry_.size));
+  checkAuxiliary (auxiliary, auxiliary_names_.size (), patches.size (), "fitCascade");
+  // The positives' features only: negatives set no threshold.
+  std::vector<std::size_t> rows;
+  std::vector<int> positive_labels;
+  for (std::size_t i = 0; i < patches.size (); ++i)
+    if (labels[i] >= 0)
+    {
+      rows.push_back (i);
+      positive_labels.push_back (labels[i]);
+    }
+  const int fragments = static_cast<int> (dictionary_.size ());
+  const std::size_t names = auxiliary_names_.size ();
+  cv::Mat samples (static_cast<int> (rows.size ()), fragments + static_cast<int> (names), CV_32F);
+  cv::parallel_for_ (cv::Range (0, samples.rows), [&] (const cv::Range &range) {
+    for (int r = range.start; r < range.end; ++r)
+    {
+      const std::size_t i = rows[static_cast<std::size_t> (r)];
+      float *row = samples.ptr<float> (r);
+      dictionary_.computeFeatures (patches[i], row);
+      for (std::size_t a = 0; a < names; ++a)
+        row[fragments + static_cast<int> (a)] = auxiliary[i][a];
+    }
+  });
+  params_ = params;
+  try
+  {
+    fitCascadeToRows (samples, positive_labels);
+    prepareCascade ();
+  }
+  catch (const ModelError &e)
+  {
+    cascade_ = SoftCascade ();
+    stage_fragments_.clear ();
+    throw std::invalid_argument (std::string ("PatchClassifier::fitCascade: ") + e.what ());
+  }
 }
 
 void
@@ -941,6 +1054,10 @@ PatchClassifier::save (const std::string &path, const nlohmann::json &metadata) 
     fs << "levels" << "[:";
     for (const float l : cascade_.levels)
       fs << static_cast<double> (l);
+    fs << "]";
+    fs << "miss_rates" << "[:";
+    for (const float m : cascade_.miss_rates)
+      fs << static_cast<double> (m);
     fs << "]";
     fs << "thresholds" << "[:";
     for (const float t : cascade_.thresholds)
@@ -1140,8 +1257,14 @@ PatchClassifier::load (const std::string &path)
       }
       for (const double l : numbers ("levels", kMaxCascadeLevels))
         model.cascade_.levels.push_back (static_cast<float> (std::max (-2.0, std::min (2.0, l))));
-      const std::size_t expected =
-          model.cascade_.levels.size () * static_cast<std::size_t> (classes) * model.cascade_.stage_ends.size ();
+      // Without miss rates (the first cascades): direct backward pruning alone.
+      if (cascade["miss_rates"].empty ())
+        model.cascade_.miss_rates = {0.f};
+      else
+        for (const double m : numbers ("miss_rates", kMaxCascadeLevels))
+          model.cascade_.miss_rates.push_back (static_cast<float> (std::max (-2.0, std::min (2.0, m))));
+      const std::size_t expected = model.cascade_.miss_rates.size () * model.cascade_.levels.size () *
+                                   static_cast<std::size_t> (classes) * model.cascade_.stage_ends.size ();
       for (const double t : numbers ("thresholds", expected))
         model.cascade_.thresholds.push_back (
             std::fabs (t) <= static_cast<double> (-kNeverBelow) ? static_cast<float> (t)
@@ -1152,6 +1275,7 @@ PatchClassifier::load (const std::string &path)
     // What the model was trained with (the file keeps the cascade, not the parameters).
     model.params_.cascade_stage_ends = model.cascade_.stage_ends;
     model.params_.cascade_levels = model.cascade_.levels;
+    model.params_.cascade_miss_rates = model.cascade_.miss_rates;
   }
   catch (const ModelError &e)
   {

@@ -737,6 +737,11 @@ TEST (PatchClassifier, BadInputThrows)
   EXPECT_THROW (c.train (set.patches, set.labels, 2, bad), std::invalid_argument);
   bad.cascade_stage_ends.assign (33, 1);
   EXPECT_THROW (c.train (set.patches, set.labels, 2, bad), std::invalid_argument);
+  bad = params;
+  bad.cascade_miss_rates = {0.6f};
+  EXPECT_THROW (c.train (set.patches, set.labels, 2, bad), std::invalid_argument);
+  bad.cascade_miss_rates = {0.02f, 0.01f};
+  EXPECT_THROW (c.train (set.patches, set.labels, 2, bad), std::invalid_argument);
   EXPECT_FALSE (c.trained ());
 
   float m[2], conf[2];
@@ -779,6 +784,21 @@ TEST (SoftCascade, KeepsEveryTrainingPositiveOfItsLevelAndRejectsBackground)
         ASSERT_EQ (agex_test::bits (m[c]), agex_test::bits (full_m[c]));
     }
     EXPECT_GT (checked, 250) << "level " << level;
+    // With a miss rate, at most that fraction of those positives is rejected.
+    for (std::size_t r = 1; r < cascade.miss_rates.size (); ++r)
+    {
+      int reaching = 0, rejected = 0;
+      for (std::size_t i = 0; i < train.patches.size (); ++i)
+      {
+        const int label = train.labels[i];
+        classifier.classify (train.patches[i], full_m, full_c);
+        if (label < 0 || full_c[label] < level)
+          continue;
+        ++reaching;
+        rejected += !classifier.classifyCascade (train.patches[i], nullptr, level, m, conf, cascade.miss_rates[r]);
+      }
+      EXPECT_LE (rejected, cascade.miss_rates[r] * reaching) << "miss rate " << cascade.miss_rates[r];
+    }
   }
 
   // Held out: a patch the cascade keeps gets exactly classify ()'s values; background is
@@ -849,18 +869,32 @@ TEST (SoftCascade, ALevelNoPositiveReachesNeverRejectsAndRoundTrips)
   PatchClassifier c;
   c.train (train.patches, train.labels, 2, params);
   ASSERT_FALSE (c.cascade ().empty ());
-  for (std::size_t k = 0; k < 2 * 2; ++k)  // level 1: both classes, both stages
-    EXPECT_EQ (c.cascade ().threshold (1, k / 2, k % 2), -1e30f);
+  for (std::size_t m = 0; m < c.cascade ().miss_rates.size (); ++m)
+    for (std::size_t k = 0; k < 2 * 2; ++k)  // level 1: both classes, both stages
+      EXPECT_EQ (c.cascade ().threshold (m, 1, k / 2, k % 2), -1e30f);
   float m[2], conf[2];
   for (const DepthPatch &p : train.patches)
-    ASSERT_TRUE (c.classifyCascade (p, nullptr, 0.999999f, m, conf));
+    ASSERT_TRUE (c.classifyCascade (p, nullptr, 0.999999f, m, conf, 0.5f));
   TempDir dir;
   c.save (dir.file ("a.yml"), nlohmann::json ());
   const PatchClassifier loaded = PatchClassifier::load (dir.file ("a.yml"));
   EXPECT_EQ (loaded.params ().cascade_levels, params.cascade_levels);
   EXPECT_EQ (loaded.params ().cascade_stage_ends, params.cascade_stage_ends);
+  EXPECT_EQ (loaded.params ().cascade_miss_rates, params.cascade_miss_rates);
   loaded.save (dir.file ("b.yml"), nlohmann::json ());
   EXPECT_EQ (agex_test::readAll (dir.file ("a.yml")), agex_test::readAll (dir.file ("b.yml")));
+
+  // The first cascades had no miss rates: such a file reads as direct backward pruning.
+  params.cascade_miss_rates = {0.f};
+  c.train (train.patches, train.labels, 2, params);
+  c.save (dir.file ("c.yml"), nlohmann::json ());
+  const std::string text = agex_test::readAll (dir.file ("c.yml"));
+  const std::size_t at = text.find ("   miss_rates: [ 0. ]\n");
+  ASSERT_NE (at, std::string::npos);
+  agex_test::writeAll (dir.file ("d.yml"), text.substr (0, at) + text.substr (text.find ('\n', at) + 1));
+  const PatchClassifier old = PatchClassifier::load (dir.file ("d.yml"));
+  EXPECT_EQ (old.cascade ().miss_rates, std::vector<float>{0.f});
+  EXPECT_EQ (old.cascade ().thresholds, c.cascade ().thresholds);
 }
 
 // ---------------------------------------------------------------------------------------
@@ -1065,7 +1099,7 @@ TEST (ModelFile, DamagedModelsThrowModelErrorNamingTheFile)
   const std::string casc = dir.file ("cascade.yml");
   const std::string ends = "stage_ends: [ 4, 8, 16, 32 ]";
   ASSERT_NE (text.find (ends), std::string::npos);
-  for (const std::string &bad : {"stage_ends: [ 8, 4, 16, 32 ]", "stage_ends: [ 4, 8, 16, 60 ]",
+  for (const char *bad : {"stage_ends: [ 8, 4, 16, 32 ]", "stage_ends: [ 4, 8, 16, 60 ]",
                                  "stage_ends: [ 4, 8, 16, 32.5 ]", "stage_ends: [ 4, x, 16, 32 ]",
                                  "stage_ends: []", "stage_ends: 4"})
   {
@@ -1079,7 +1113,7 @@ TEST (ModelFile, DamagedModelsThrowModelErrorNamingTheFile)
   expectModelError (casc, "cascade");
   const std::size_t first = text.find ("thresholds: [ ") + 14;
   const std::string value = text.substr (first, text.find (',', first) - first);
-  for (const std::string &bad : {"1e+40", ".nan", "x"})
+  for (const char *bad : {"1e+40", ".nan", "x"})
   {
     std::string t = text;
     t.replace (first, value.size (), bad);
@@ -1094,6 +1128,11 @@ TEST (ModelFile, DamagedModelsThrowModelErrorNamingTheFile)
   std::string bad_level = text;
   bad_level.replace (level, text.find (',', level) - level, "1.5");
   agex_test::writeAll (casc, bad_level);
+  expectModelError (casc, "cascade");
+  const std::size_t rate = text.find ("miss_rates: [ ") + 14;
+  std::string bad_rate = text;
+  bad_rate.replace (rate, text.find (',', rate) - rate, "0.7");
+  agex_test::writeAll (casc, bad_rate);
   expectModelError (casc, "cascade");
   agex_test::writeAll (casc, replaceOnce (text, "cascade:\n", "cascade: 3\nold_cascade:\n"));
   expectModelError (casc, "cascade");

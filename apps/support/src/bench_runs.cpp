@@ -143,6 +143,7 @@ benchDataset (const std::string &spec, bool keyframes_only, const LoadedDetector
           {"forest", loaded.forest ? loaded.files.back () : std::string ()},
           {"forest_stride", loaded.forest_stride},
           {"cascade_min_confidence", loaded.cascade_min_confidence},
+          {"cascade_miss_rate", loaded.cascade_miss_rate},
           {"frames", clouds.size ()},
           {"width", clouds.front ()->width},
           {"height", clouds.front ()->height},

@@ -37,6 +37,12 @@ detectorOptionsDescription (DetectorChoice &choice, const std::string &model_def
      }),
      "the classifier's soft cascade drops candidates it rejects at this confidence without computing all their "
      "features (0: every candidate classified in full; models trained before the cascade have none)")
+    ("cascade-miss-rate",
+     po::value (&choice.cascade_miss_rate)->default_value (choice.cascade_miss_rate)->notifier ([] (float v) {
+       if (!(v >= 0.f && v <= 0.5f))
+         throw std::runtime_error ("--cascade-miss-rate must lie in [0, 0.5]");
+     }),
+     "the fraction of the training positives above --cascade-min-confidence the cascade may reject (0: none)")
     ("forest-input", po::value (&choice.forest_input)->default_value (choice.forest_input)->notifier ([] (const std::string &v) {
        ForestInput input;
        if (!parseForestInput (v, input))
@@ -62,6 +68,7 @@ LoadedDetector::configure (BodyPartDetector<pcl::PointXYZ> &detector) const
   detector.setMode (mode);
   detector.setForestStride (forest_stride);
   detector.setCascadeMinConfidence (cascade_min_confidence);
+  detector.setCascadeMissRate (cascade_miss_rate);
   detector.setForestParts (forest_parts);
 }
 
@@ -97,6 +104,7 @@ loadDetector (const DetectorChoice &choice, DetectorKind kind)
   }
   loaded.forest_stride = choice.forest_stride;
   loaded.cascade_min_confidence = choice.cascade_min_confidence;
+  loaded.cascade_miss_rate = choice.cascade_miss_rate;
   if (!parseForestInput (choice.forest_input, loaded.forest_parts.input))
     throw std::runtime_error ("--forest-input must be automatic, persons or meshes, not '" + choice.forest_input + "'");
   if (!parsePartProposals (choice.forest_parts, loaded.forest_parts.proposals))

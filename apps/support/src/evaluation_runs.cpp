@@ -262,7 +262,7 @@ reportDetection (const DetectionTally &tally, const nlohmann::json &about, const
 
 /** The keys of a detect report that say what was evaluated how: equal in every share. */
 const char *const kRunKeys[] = {"dataset", "model", "detector_mode", "forest", "radius_m", "min_iou",
-                                "cascade_min_confidence"};
+                                "cascade_min_confidence", "cascade_miss_rate"};
 }  // namespace
 
 int
@@ -271,7 +271,8 @@ evaluateDetection (const DatasetSelection &selection, const LoadedDetector &load
 {
   nlohmann::json about = {{"dataset", selection.dataset.directory ()}, {"model", loaded.files.front ()},
                           {"detector_mode", loaded.mode_name},
-                          {"cascade_min_confidence", loaded.cascade_min_confidence}};
+                          {"cascade_min_confidence", loaded.cascade_min_confidence},
+                          {"cascade_miss_rate", loaded.cascade_miss_rate}};
   if (loaded.files.size () > 1)
     about["forest"] = loaded.files.back ();
   if (loaded.mode == DetectorMode::Forest)

@@ -79,6 +79,9 @@ parseTrainFlags (int argc, char **argv, TrainFlags &flags)
   general.add_options () ("help,h", "show this help")
     ("dataset", po::value (&flags.datasets)->multitoken (), "dataset directory, optionally @sequences (e.g. bonn@1,2,3)")
     ("out", po::value (&flags.out), "model file to write")
+    ("cascade-for", po::value (&flags.cascade_for),
+     "MODEL: keep MODEL's classifier and settings and fit only its soft cascade to the examples these flags "
+     "collect (give the flags MODEL was trained with); written to --out")
     ("keyframes", po::bool_switch (&choice.keyframes), "train on keyframes only")
     ("radius", po::value (&choice.radius)->default_value (choice.radius, "0.1"), "metres from a labelled tip for a positive")
     ("random-negatives", po::value (&choice.random_negatives)->default_value (choice.random_negatives),
@@ -152,6 +155,8 @@ parseTrainFlags (int argc, char **argv, TrainFlags &flags)
     read.addTree (selectDataset (spec, false).dataset.directory ());
   if (!forest_path.empty ())
     read.add (forest_path);
+  if (!flags.cascade_for.empty ())
+    read.add (flags.cascade_for);
   for (const auto &pair : dataset_forests)
     read.add (pair.substr (pair.rfind ('=') + 1));
   checkOutputPath (flags.out, OutputKind::Model, read);

@@ -91,5 +91,21 @@ trainDetector (const std::vector<DepthPatch> &patches, const std::vector<std::ve
   classifier->setPatchGeometry (geometry);
   return DetectorModel (classifier, settings);
 }
+DetectorModel
+withFittedCascade (const DetectorModel &model, const std::string &path, DetectorKind kind,
+                   const std::vector<DepthPatch> &patches, const std::vector<std::vector<float>> &auxiliary,
+                   const std::vector<int> &classes, const PatchClassifierParams &params)
+{
+  if (model.settings ().kind != kind)
+    throw std::runtime_error ("--cascade-for " + path + ": a " + detectorKindName (model.settings ().kind) +
+                              " model, and these flags collect " + detectorKindName (kind) +
+                              " examples (give the flags it was trained with)");
+  if (patches.empty ())
+    throw std::runtime_error ("no training examples: no labelled frame with a body in the datasets");
+  auto classifier = std::make_shared<PatchClassifier> (model.classifier ());
+  classifier->fitCascade (patches, auxiliary, classes, params.cascade_stage_ends, params.cascade_levels,
+                          params.cascade_miss_rates);
+  return DetectorModel (classifier, model.settings ());
+}
 }  // namespace apps
 }  // namespace agex

@@ -28,6 +28,9 @@ struct PatchClassifierParams
   /** ... and the minimum confidences its rejection thresholds are fitted for (each in (0, 1),
     * increasing; empty: no cascade). */
   std::vector<float> cascade_levels = {0.02f, 0.05f, 0.1f, 0.2f};
+  /** ... and the fractions of those positives it may reject (each in [0, 0.5], increasing;
+    * 0: direct backward pruning, none). */
+  std::vector<float> cascade_miss_rates = {0.f, 0.01f, 0.02f, 0.05f};
 };
 
 /** \brief A soft cascade over a classifier's boosted stumps, fitted by direct backward
@@ -35,24 +38,31 @@ struct PatchClassifierParams
   *
   * The stumps of all classes are summed round by round (round r: stump r of every class).
   * After round stage_ends[s] a patch is rejected when for every class c its partial margin
-  * is below threshold (l, c, s): the smallest partial margin there of the class's training
-  * positives whose final margin reaches level l's confidence. So no such training positive
-  * is ever rejected, and a patch is rejected only when no class is on a path any of them
-  * took. */
+  * is below threshold (m, l, c, s). With miss rate m = 0 that is the smallest partial margin
+  * there of the class's training positives whose final confidence reaches level l: no such
+  * training positive is ever rejected. With m > 0 each stage may reject the lowest m / stages
+  * of them (Bourdev & Brandt's rejection distribution, spread evenly), so that at most the
+  * fraction m of them is lost in all and the thresholds no longer hang on a few positives
+  * that start badly. */
 struct SoftCascade
 {
   std::vector<int> stage_ends;    ///< rounds, increasing, each at least 1
   std::vector<float> levels;      ///< minimum confidences, increasing, in (0, 1)
-  std::vector<float> thresholds;  ///< [level][class][stage], partial margins (-1e30: never below)
+  std::vector<float> miss_rates;  ///< fractions of those positives rejected, increasing, in [0, 0.5]
+  std::vector<float> thresholds;  ///< [miss rate][level][class][stage], partial margins (-1e30: never below)
   int classes = 0;
 
-  bool empty () const { return levels.empty () || stage_ends.empty (); }
-  float threshold (std::size_t level, std::size_t cls, std::size_t stage) const
+  bool empty () const { return levels.empty () || stage_ends.empty () || miss_rates.empty (); }
+  float threshold (std::size_t rate, std::size_t level, std::size_t cls, std::size_t stage) const
   {
-    return thresholds[(level * static_cast<std::size_t> (classes) + cls) * stage_ends.size () + stage];
+    return thresholds[((rate * levels.size () + level) * static_cast<std::size_t> (classes) + cls) *
+                          stage_ends.size () +
+                      stage];
   }
   /** The largest level at most min_confidence, or -1 (no cascade at that confidence). */
   int levelFor (float min_confidence) const;
+  /** The largest miss rate at most max_miss_rate, or -1. */
+  int rateFor (float max_miss_rate) const;
 };
 
 /** The patch geometry a model was trained on; a detector must cut its patches the same way
@@ -142,14 +152,23 @@ public:
     * \throws std::invalid_argument if auxiliary is null but features are needed */
   void classify (const agex::DepthPatch &patch, const float *auxiliary, float *margins, float *confidences) const;
   /** \brief classify () through the soft cascade (SoftCascade) fitted for the largest level
-    * at most min_confidence: false if the patch was rejected early (margins and confidences
+    * at most min_confidence and the largest miss rate at most max_miss_rate: false if the patch was rejected early (margins and confidences
     * then hold the partial margins where it stopped; a caller drops the patch). A patch not
     * rejected gets exactly classify ()'s values, and is the only one whose features are all
     * computed. Without a cascade (an older model, min_confidence below every level, trees
     * deeper than stumps) this is classify () and returns true.
     * auxiliary may be null only for a patch-only classifier. */
   bool classifyCascade (const agex::DepthPatch &patch, const float *auxiliary, float min_confidence, float *margins,
-                        float *confidences) const;
+                        float *confidences, float max_miss_rate = 0.f) const;
+  /** \brief Fits (replaces) the soft cascade of the trained boosters to these examples: the
+    * training set, or one made the same way (e.g. for a model trained before the cascade).
+    * Only the positives count; stage_ends, levels and miss_rates as PatchClassifierParams's. The boosters
+    * and every margin stay as they are.
+    * \throws std::logic_error if not trained; std::invalid_argument for examples or
+    *         parameters train () would refuse, or patches of another size */
+  void fitCascade (const std::vector<agex::DepthPatch> &patches, const std::vector<std::vector<float>> &auxiliary,
+                   const std::vector<int> &labels, const std::vector<int> &stage_ends, const std::vector<float> &levels,
+                   const std::vector<float> &miss_rates);
   /** The soft cascade (empty for models trained before it, or without one). */
   const SoftCascade &cascade () const { return cascade_; }
 
@@ -219,7 +238,7 @@ private:
   void prepare ();
   /** Fits cascade_ to the training features (rows of samples) and labels, params_'s stages
     * and levels; leaves it empty when the trees are not all stumps. */
-  void fitCascade (const cv::Mat &samples, const std::vector<int> &labels);
+  void fitCascadeToRows (const cv::Mat &samples, const std::vector<int> &labels);
   /** Per cascade stage (and one more for the rest): the fragments first used there. Fills
     * stage_fragments_ from cascade_; \throws ModelError if the cascade does not fit. */
   void prepareCascade ();

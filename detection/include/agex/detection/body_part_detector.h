@@ -105,8 +105,14 @@ public:
     * \throws std::invalid_argument outside [0, 1) */
   void setCascadeMinConfidence (float confidence);
   float getCascadeMinConfidence () const { return cascade_min_confidence_; }
+  /** \brief The fraction of the training positives (reaching the minimum confidence) the
+    * cascade may reject (agex::SoftCascade's miss rates; the largest fitted at most this).
+    * Default kDefaultCascadeMissRate. \throws std::invalid_argument outside [0, 0.5] */
+  void setCascadeMissRate (float rate);
+  float getCascadeMissRate () const { return cascade_miss_rate_; }
   /** A confidence far below the detections that decide AP (doc/classifier.md). */
   static constexpr float kDefaultCascadeMinConfidence = 0.05f;
+  static constexpr float kDefaultCascadeMissRate = 0.01f;
 
   /** \brief How Forest mode labels and names parts (agex::ForestPartSettings; default: the
     * persons as segmented, PCL-style blobs at their extremities). A fused model keeps its
@@ -171,6 +177,7 @@ private:
   float used_fx_ = 0.f;  ///< the focal length the last forest pass used
   int forest_stride_ = 1;
   float cascade_min_confidence_ = kDefaultCascadeMinConfidence;
+  float cascade_miss_rate_ = kDefaultCascadeMissRate;
   ForestPartSettings forest_parts_;
   pcl::PointCloud<pcl::PointXYZ>::Ptr xyz_frame_;  ///< the input as XYZ, for other point types
   pcl::PointCloud<BodyPartLabelPoint> part_labels_;

@@ -22,6 +22,7 @@ struct DetectorChoice
   std::string mode;  ///< agex, fused or forest; empty: the model's own kind
   int forest_stride = 1;
   float cascade_min_confidence = BodyPartDetector<pcl::PointXYZ>::kDefaultCascadeMinConfidence;
+  float cascade_miss_rate = BodyPartDetector<pcl::PointXYZ>::kDefaultCascadeMissRate;
   std::string forest_input = "automatic";  ///< forest mode: automatic, persons or meshes (agex::ForestInput)
   std::string forest_parts = "blobs";    ///< forest mode: blobs or modes (agex::PartProposals)
 };
@@ -38,6 +39,7 @@ struct LoadedDetector
   DetectorMode mode = DetectorMode::Model;
   int forest_stride = 1;
   float cascade_min_confidence = BodyPartDetector<pcl::PointXYZ>::kDefaultCascadeMinConfidence;
+  float cascade_miss_rate = BodyPartDetector<pcl::PointXYZ>::kDefaultCascadeMissRate;
   ForestPartSettings forest_parts;
   /** What names the parts: "agex", "fused", "sliding_window" (the model's kind) or "forest". */
   std::string mode_name;

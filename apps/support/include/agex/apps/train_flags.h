@@ -20,6 +20,7 @@ struct TrainFlags
 
   std::vector<std::string> datasets;  ///< DIR[@SEQ,...]
   std::string out;                    ///< the model file
+  std::string cascade_for;            ///< a trained model whose soft cascade alone is fitted (empty: train)
   DetectorSettings settings;
   PatchGeometry patch{41, 0.6f, 0.3f};
   PatchClassifierParams classifier_params;

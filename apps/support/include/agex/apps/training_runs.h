@@ -51,5 +51,12 @@ nlohmann::json collectTrainingExamples (const std::vector<std::string> &datasets
 DetectorModel trainDetector (const std::vector<DepthPatch> &patches, const std::vector<std::vector<float>> &auxiliary,
                              const std::vector<int> &classes, const PatchClassifierParams &params,
                              const PatchGeometry &geometry, const DetectorSettings &settings);
+/** \brief model with its soft cascade fitted (PatchClassifier::fitCascade) to the examples,
+  * the classifier and settings otherwise unchanged.
+  * \throws std::runtime_error naming path if the examples are of another detector kind */
+DetectorModel withFittedCascade (const DetectorModel &model, const std::string &path, DetectorKind kind,
+                                 const std::vector<DepthPatch> &patches,
+                                 const std::vector<std::vector<float>> &auxiliary, const std::vector<int> &classes,
+                                 const PatchClassifierParams &params);
 }  // namespace apps
 }  // namespace agex

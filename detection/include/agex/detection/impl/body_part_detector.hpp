@@ -53,6 +53,15 @@ agex::BodyPartDetector<PointT>::setCascadeMinConfidence (float confidence)
 }
 
 template <typename PointT> void
+agex::BodyPartDetector<PointT>::setCascadeMissRate (float rate)
+{
+  if (!(rate >= 0.f && rate <= 0.5f))
+    throw std::invalid_argument ("BodyPartDetector::setCascadeMissRate: " + std::to_string (rate) +
+                                 " outside [0, 0.5]");
+  cascade_miss_rate_ = rate;
+}
+
+template <typename PointT> void
 agex::BodyPartDetector<PointT>::compute (std::vector<BodyPartDetection> &detections)
 {
   detections.clear ();
@@ -259,7 +268,7 @@ agex::BodyPartDetector<PointT>::classifyFused (std::vector<BodyPartDetection> &d
   {
     features.compute (candidates[i], aux.data ());
     if (!classifier.classifyCascade (patches[i], aux.data (), cascade_min_confidence_, margins.data (),
-                                     confidences.data ()))
+                                     confidences.data (), cascade_miss_rate_))
       continue;
     const int best = static_cast<int> (std::max_element (confidences.begin (), confidences.end ()) - confidences.begin ());
     const FusedCandidate &c = candidates[i];
@@ -336,7 +345,7 @@ agex::BodyPartDetector<PointT>::classify (std::vector<BodyPartDetection> &detect
   for (std::size_t i = 0; i < patches.size () && i < prepared.interest_points.size (); ++i)
   {
     if (!classifier.classifyCascade (patches[i], nullptr, cascade_min_confidence_, margins.data (),
-                                     confidences.data ()))
+                                     confidences.data (), cascade_miss_rate_))
       continue;
     const int best = static_cast<int> (std::max_element (confidences.begin (), confidences.end ()) - confidences.begin ());
     const agex::InterestPoint &p = prepared.interest_points[i];

@@ -11,6 +11,11 @@
 #     forest 9, the four cross-fitting forests 18, then the three detectors side by side (fused
 #     31 min, sliding window 44, the AGEX-only model 43 min measured beside two other training
 #     runs): about 1 h 30 min;
+#     Every detector it trains carries a soft cascade (doc/classifier.md). The bundled
+#     agex_bonn.yml was trained before the cascade and had its cascade fitted afterwards by
+#     `agex_train --cascade-for` with its own training command (100 s); a retrain from here
+#     gives a model with its cascade built in, though not bit for bit the bundled one (the part
+#     modes changed since, and with them the forest candidates it trains on);
 #   bonn: the earlier recipe, both views of the 8 Bonn sequences as recorded; about half an
 #     hour on 2 cores.
 # Usage: scripts/train_bundled_models.sh [BUILD_DIR] [WORK_DIR]

@@ -133,7 +133,7 @@ TEST (BodyPartDetectorWorkingDensity, DetectionsComeAtTheInputsPixelsAndWhereEve
 TEST (BodyPartDetectorCascade, KeepsTheConfidentDetectionsExactlyAndClassifiesAsMany)
 {
   // The bundled Bonn frame through the bundled detector with its soft cascade off and at the
-  // default confidence: the same candidates are classified, the cascade drops some of the
+  // default confidence and miss rate: the same candidates are classified, the cascade drops some of the
   // least confident, and every detection well above its level comes out unchanged.
   const agex::Frame frame = agex::loadFrame (AGEX_SOURCE_DIR "/data/frames/bonn_1_002.png");
   auto detector = agex::BodyPartDetector<pcl::PointXYZ>::fromModel (AGEX_SOURCE_DIR "/data/models/agex_bonn.yml");
@@ -142,6 +142,9 @@ TEST (BodyPartDetectorCascade, KeepsTheConfidentDetectionsExactlyAndClassifiesAs
   EXPECT_THROW (detector->setCascadeMinConfidence (1.f), std::invalid_argument);
   EXPECT_THROW (detector->setCascadeMinConfidence (-0.1f), std::invalid_argument);
   EXPECT_THROW (detector->setCascadeMinConfidence (std::numeric_limits<float>::quiet_NaN ()), std::invalid_argument);
+  EXPECT_EQ (detector->getCascadeMissRate (), agex::BodyPartDetector<pcl::PointXYZ>::kDefaultCascadeMissRate);
+  EXPECT_THROW (detector->setCascadeMissRate (0.6f), std::invalid_argument);
+  EXPECT_THROW (detector->setCascadeMissRate (std::numeric_limits<float>::quiet_NaN ()), std::invalid_argument);
   detector->setFocalLength (static_cast<float> (frame.intrinsics.fx), static_cast<float> (frame.intrinsics.fy));
   detector->setInputCloud (frame.cloud);
   std::vector<agex::BodyPartDetection> found[2];

@@ -32,7 +32,7 @@ main (int argc, char **argv)
       // The model's own training record stays; the cascade's fit is added beside it.
       const agex::DetectorModel base = agex::DetectorModel::load (flags.cascade_for);
       const agex::DetectorModel model = agex::apps::withFittedCascade (
-          base, flags.cascade_for, flags.settings.kind, patches, auxiliary, classes, flags.classifier_params);
+          base, flags.cascade_for, flags.settings, patches, auxiliary, classes, flags.classifier_params);
       const double seconds = std::chrono::duration<double> (std::chrono::steady_clock::now () - start).count ();
       nlohmann::json training = base.training ();
       training["cascade_fit"] = {{"command", command.str ()}, {"datasets", sources}, {"patches", patches.size ()},

@@ -689,6 +689,8 @@ bool
 PatchClassifier::classifyCascade (const agex::DepthPatch &patch, const float *auxiliary, float min_confidence,
                                   float *margins, float *confidences, float max_miss_rate) const
 {
+  if (!(max_miss_rate >= 0.f))
+    throw std::invalid_argument ("PatchClassifier::classifyCascade: max_miss_rate must be a number >= 0");
   const int level = stage_fragments_.empty () ? -1 : cascade_.levelFor (min_confidence);
   const int rate = stage_fragments_.empty () ? -1 : cascade_.rateFor (max_miss_rate);
   if (level < 0 || rate < 0)
@@ -938,18 +940,19 @@ PatchClassifier::fitCascade (const std::vector<agex::DepthPatch> &patches,
         row[fragments + static_cast<int> (a)] = auxiliary[i][a];
     }
   });
-  params_ = params;
+  // Fitted on a copy: a refused fit leaves this classifier as it was.
+  PatchClassifier fitted = *this;
+  fitted.params_ = params;
   try
   {
-    fitCascadeToRows (samples, positive_labels);
-    prepareCascade ();
+    fitted.fitCascadeToRows (samples, positive_labels);
+    fitted.prepareCascade ();
   }
   catch (const ModelError &e)
   {
-    cascade_ = SoftCascade ();
-    stage_fragments_.clear ();
     throw std::invalid_argument (std::string ("PatchClassifier::fitCascade: ") + e.what ());
   }
+  *this = std::move (fitted);
 }
 
 void

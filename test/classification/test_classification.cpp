@@ -17,6 +17,7 @@
 #include <cmath>
 #include <cstdint>
 #include <iostream>
+#include <limits>
 #include <random>
 #include <string>
 #include <vector>
@@ -833,6 +834,73 @@ TEST (SoftCascade, KeepsEveryTrainingPositiveOfItsLevelAndRejectsBackground)
             << " background patches rejected, " << kept_positive << " of " << positive << " positives kept" << std::endl;
   EXPECT_GT (rejected_background, background / 2);
   EXPECT_GT (kept_positive, positive * 9 / 10);
+}
+
+TEST (SoftCascade, MissRatesBoundTheRejectedPositivesOfEachClass)
+{
+  const SyntheticSet train = syntheticSet (150, 300, 1);
+  PatchClassifierParams params = smallParams ();
+  params.cascade_miss_rates = {0.f, 0.2f, 0.4f};
+  PatchClassifier classifier;
+  classifier.train (train.patches, train.labels, 2, params);
+  const agex::SoftCascade &cascade = classifier.cascade ();
+  ASSERT_EQ (cascade.miss_rates, params.cascade_miss_rates);
+  float full_m[2], full_c[2], m[2], conf[2];
+  int rejected_at_04 = 0;
+  for (const float level : cascade.levels)
+    for (int c = 0; c < 2; ++c)
+      for (const float rate : cascade.miss_rates)
+      {
+        int reaching = 0, rejected = 0;
+        for (std::size_t i = 0; i < train.patches.size (); ++i)
+        {
+          if (train.labels[i] != c)
+            continue;
+          classifier.classify (train.patches[i], full_m, full_c);
+          if (full_c[c] < level)
+            continue;
+          ++reaching;
+          rejected += !classifier.classifyCascade (train.patches[i], nullptr, level, m, conf, rate);
+        }
+        SCOPED_TRACE ("class " + std::to_string (c) + ", level " + std::to_string (level) + ", miss rate " +
+                      std::to_string (rate));
+        EXPECT_GT (reaching, 100);
+        EXPECT_LE (rejected, rate * reaching);
+        if (rate == 0.4f)
+          rejected_at_04 += rejected;
+      }
+  EXPECT_GT (rejected_at_04, 0) << "the miss rate rejected nothing";
+  float unused[2];
+  EXPECT_THROW (classifier.classifyCascade (train.patches[0], nullptr, 0.1f, unused, unused, -0.1f),
+                std::invalid_argument);
+  EXPECT_THROW (classifier.classifyCascade (train.patches[0], nullptr, 0.1f, unused, unused,
+                                            std::numeric_limits<float>::quiet_NaN ()),
+                std::invalid_argument);
+}
+
+TEST (SoftCascade, FittingATrainedClassifierGivesTrainsThresholds)
+{
+  const SyntheticSet train = syntheticSet (150, 300, 1);
+  PatchClassifierParams params = smallParams ();
+  params.cascade_levels.clear ();  // trained without a cascade, as models before it were
+  PatchClassifier bare;
+  EXPECT_THROW (bare.fitCascade (train.patches, {}, train.labels, {4}, {0.1f}, {0.f}), std::logic_error);
+  bare.train (train.patches, train.labels, 2, params);
+  ASSERT_TRUE (bare.cascade ().empty ());
+  const PatchClassifier &with = trainedClassifier ();  // the same set, the default cascade
+  const PatchClassifierParams defaults;
+  bare.fitCascade (train.patches, {}, train.labels, defaults.cascade_stage_ends, defaults.cascade_levels,
+                   defaults.cascade_miss_rates);
+  EXPECT_EQ (bare.cascade ().stage_ends, with.cascade ().stage_ends);
+  ASSERT_EQ (bare.cascade ().thresholds.size (), with.cascade ().thresholds.size ());
+  for (std::size_t i = 0; i < bare.cascade ().thresholds.size (); ++i)
+    ASSERT_EQ (agex_test::bits (bare.cascade ().thresholds[i]), agex_test::bits (with.cascade ().thresholds[i]));
+  // Refused fits leave the cascade as it was.
+  const std::vector<float> before = bare.cascade ().thresholds;
+  EXPECT_THROW (bare.fitCascade (train.patches, {}, train.labels, {4}, {0.2f, 0.1f}, {0.f}), std::invalid_argument);
+  std::vector<DepthPatch> small (train.patches.size (), flatPatch (21));
+  EXPECT_THROW (bare.fitCascade (small, {}, train.labels, {4}, {0.1f}, {0.f}), std::invalid_argument);
+  EXPECT_EQ (bare.cascade ().thresholds, before);
 }
 
 TEST (SoftCascade, NoCascadeWithoutLevelsOrStages)

@@ -31,18 +31,19 @@ detectorOptionsDescription (DetectorChoice &choice, const std::string &model_def
      }),
      "forest: one evaluated pixel per stride x stride cell (0: by the focal length, 2 at 640x480)")
     ("cascade-min-confidence",
-     po::value (&choice.cascade_min_confidence)->default_value (choice.cascade_min_confidence)->notifier ([] (float v) {
+     po::value (&choice.cascade_min_confidence)->default_value (choice.cascade_min_confidence, "0.05")->notifier ([] (float v) {
        if (!(v >= 0.f && v < 1.f))
          throw std::runtime_error ("--cascade-min-confidence must lie in [0, 1)");
      }),
      "the classifier's soft cascade drops candidates it rejects at this confidence without computing all their "
      "features (0: every candidate classified in full; models trained before the cascade have none)")
     ("cascade-miss-rate",
-     po::value (&choice.cascade_miss_rate)->default_value (choice.cascade_miss_rate)->notifier ([] (float v) {
+     po::value (&choice.cascade_miss_rate)->default_value (choice.cascade_miss_rate, "0.02")->notifier ([] (float v) {
        if (!(v >= 0.f && v <= 0.5f))
          throw std::runtime_error ("--cascade-miss-rate must lie in [0, 0.5]");
      }),
-     "the fraction of the training positives above --cascade-min-confidence the cascade may reject (0: none)")
+     "the fraction of each class's training positives reaching the cascade's level (the largest at most "
+     "--cascade-min-confidence) it may reject (0: none)")
     ("forest-input", po::value (&choice.forest_input)->default_value (choice.forest_input)->notifier ([] (const std::string &v) {
        ForestInput input;
        if (!parseForestInput (v, input))

@@ -10,6 +10,7 @@
 #include <boost/program_options.hpp>
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <stdexcept>
 
@@ -60,6 +61,47 @@ checkRanges (const TrainFlags &flags)
   if (patch.size < 3 || patch.size > 41 || !(patch.extent > 0.f && patch.extent <= 5.f) ||
       !(patch.clamp > 0.f && patch.clamp <= 5.f))
     throw std::runtime_error ("--patch-size must lie in [3, 41], --patch-extent and --patch-clamp in (0, 5]");
+}
+}  // namespace
+
+namespace
+{
+/** \brief Refuses, before any frame is read, a --cascade-for model the flags would not
+  * reproduce the examples of: another detector kind, patch geometry, detector or pipeline
+  * setting, or (fused) forest. */
+void
+checkCascadeModel (const TrainFlags &flags)
+{
+  const DetectorModel model = DetectorModel::load (flags.cascade_for);
+  const std::string what = "--cascade-for " + flags.cascade_for + ": ";
+  const DetectorSettings &trained = model.settings ();
+  if (trained.kind != flags.settings.kind)
+    throw std::runtime_error (what + "a model of the " + detectorKindName (trained.kind) +
+                              " detector, and these flags collect " + detectorKindName (flags.settings.kind) +
+                              " examples (give the flags it was trained with)");
+  const PatchGeometry &g = model.patchGeometry ();
+  const auto near = [] (float a, float b) { return std::fabs (a - b) <= 1e-5f * std::max (1.f, std::fabs (b)); };
+  if (g.size != flags.patch.size || !near (g.extent, flags.patch.extent) || !near (g.clamp, flags.patch.clamp))
+    throw std::runtime_error (what + "trained on " + std::to_string (g.size) + "-cell patches " +
+                              std::to_string (g.extent) + " m wide, clamp " + std::to_string (g.clamp) +
+                              " m; give its --patch-size, --patch-extent and --patch-clamp");
+  if (trained.kind == DetectorKind::Fused && trained.forest_bytes != flags.settings.forest_bytes)
+    throw std::runtime_error (what + "trained with another forest than --forest (" + trained.forest_file + ", " +
+                              std::to_string (trained.forest_bytes) + " bytes)");
+  nlohmann::json a = trained.toJson (), b = flags.settings.toJson ();
+  for (nlohmann::json *doc : {&a, &b})
+    if (doc->contains ("fused"))
+    {
+      (*doc)["fused"].erase ("forest");
+      (*doc)["fused"].erase ("forest_bytes");
+    }
+  if (a != b)
+  {
+    const nlohmann::json diff = nlohmann::json::diff (a, b);
+    throw std::runtime_error (what + "trained with other settings than these flags give (first: " +
+                              (diff.empty () ? std::string ("?") : diff.front ().value ("path", std::string ("?"))) +
+                              "); give the flags it was trained with");
+  }
 }
 }  // namespace
 
@@ -160,6 +202,8 @@ parseTrainFlags (int argc, char **argv, TrainFlags &flags)
   for (const auto &pair : dataset_forests)
     read.add (pair.substr (pair.rfind ('=') + 1));
   checkOutputPath (flags.out, OutputKind::Model, read);
+  if (!flags.cascade_for.empty ())
+    checkCascadeModel (flags);
   classifier_params.dictionary.seed = choice.seed;
   return true;
 }

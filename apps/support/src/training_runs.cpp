@@ -92,20 +92,30 @@ trainDetector (const std::vector<DepthPatch> &patches, const std::vector<std::ve
   return DetectorModel (classifier, settings);
 }
 DetectorModel
-withFittedCascade (const DetectorModel &model, const std::string &path, DetectorKind kind,
+withFittedCascade (const DetectorModel &model, const std::string &path, const DetectorSettings &settings,
                    const std::vector<DepthPatch> &patches, const std::vector<std::vector<float>> &auxiliary,
                    const std::vector<int> &classes, const PatchClassifierParams &params)
 {
-  if (model.settings ().kind != kind)
-    throw std::runtime_error ("--cascade-for " + path + ": a " + detectorKindName (model.settings ().kind) +
-                              " model, and these flags collect " + detectorKindName (kind) +
-                              " examples (give the flags it was trained with)");
   if (patches.empty ())
     throw std::runtime_error ("no training examples: no labelled frame with a body in the datasets");
   auto classifier = std::make_shared<PatchClassifier> (model.classifier ());
-  classifier->fitCascade (patches, auxiliary, classes, params.cascade_stage_ends, params.cascade_levels,
-                          params.cascade_miss_rates);
-  return DetectorModel (classifier, model.settings ());
+  try
+  {
+    classifier->fitCascade (patches, auxiliary, classes, params.cascade_stage_ends, params.cascade_levels,
+                            params.cascade_miss_rates);
+  }
+  catch (const std::exception &e)
+  {
+    throw std::runtime_error ("--cascade-for " + path + ": " + e.what ());
+  }
+  if (classifier->cascade ().empty ())
+    throw std::runtime_error ("--cascade-for " + path + ": no cascade fits it (no stage end below its " +
+                              std::to_string (classifier->params ().weak_count) + " rounds)");
+  // The model's settings, with its forest named relative to --out (parseTrainFlags checked
+  // that it is the forest the model was trained with).
+  DetectorSettings kept = model.settings ();
+  kept.forest_file = settings.forest_file;
+  return DetectorModel (classifier, kept);
 }
 }  // namespace apps
 }  // namespace agex

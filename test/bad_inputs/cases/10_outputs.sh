@@ -94,6 +94,10 @@ check "--cascade-min-confidence 1 (every candidate rejected)" 1 "--cascade-min-c
   $D in/frame_b.png --cascade-min-confidence 1
 check "--cascade-min-confidence nan" 1 "cascade-min-confidence" \
   $D in/frame_b.png --cascade-min-confidence nan
+check "--cascade-miss-rate 0.6" 1 "--cascade-miss-rate must lie in \\[0, 0.5\\]" \
+  $D in/frame_b.png --cascade-miss-rate 0.6
+check "agex_train --cascade-for a fused model with the AGEX-point flags" 1 "--cascade-for in/model.yml: a model of the fused detector, and these flags collect agex examples" \
+  $T --dataset in/dataset --out out/cascade.yml --cascade-for in/model.yml
 
 # Reports of --shard runs whose numbers do not fit what they count, and merged results lines
 # that are not whole: each refusal names the file and the field.

@@ -157,6 +157,7 @@ public:
     * rejected gets exactly classify ()'s values, and is the only one whose features are all
     * computed. Without a cascade (an older model, min_confidence below every level, trees
     * deeper than stumps) this is classify () and returns true.
+    * \throws std::invalid_argument as classify (), or for a max_miss_rate below 0 or NaN
     * auxiliary may be null only for a patch-only classifier. */
   bool classifyCascade (const agex::DepthPatch &patch, const float *auxiliary, float min_confidence, float *margins,
                         float *confidences, float max_miss_rate = 0.f) const;

@@ -52,9 +52,10 @@ DetectorModel trainDetector (const std::vector<DepthPatch> &patches, const std::
                              const std::vector<int> &classes, const PatchClassifierParams &params,
                              const PatchGeometry &geometry, const DetectorSettings &settings);
 /** \brief model with its soft cascade fitted (PatchClassifier::fitCascade) to the examples,
-  * the classifier and settings otherwise unchanged.
-  * \throws std::runtime_error naming path if the examples are of another detector kind */
-DetectorModel withFittedCascade (const DetectorModel &model, const std::string &path, DetectorKind kind,
+  * its classifier and settings unchanged but for the forest's path (settings.forest_file,
+  * relative to the file it is written to).
+  * \throws std::runtime_error naming path if the examples do not fit it or no cascade fits */
+DetectorModel withFittedCascade (const DetectorModel &model, const std::string &path, const DetectorSettings &settings,
                                  const std::vector<DepthPatch> &patches,
                                  const std::vector<std::vector<float>> &auxiliary, const std::vector<int> &classes,
                                  const PatchClassifierParams &params);

@@ -1165,28 +1165,22 @@ TEST (ModelFile, DamagedModelsThrowModelErrorNamingTheFile)
     many += ", " + std::to_string (e);
   agex_test::writeAll (casc, replaceOnce (text, ends, many + " ]"));
   expectModelError (casc, "cascade");
-  const std::size_t first = text.find ("thresholds: [ ") + 14;
-  const std::string value = text.substr (first, text.find (',', first) - first);
-  for (const char *bad : {"1e+40", ".nan", "x"})
-  {
+  // The first value of a cascade list replaced, and the file refused.
+  const auto refusedWithFirst = [&] (const std::string &list, const std::string &value) {
+    const std::size_t first = text.find (list + ": [ ") + list.size () + 4;
     std::string t = text;
-    t.replace (first, value.size (), bad);
+    t.replace (first, text.find (',', first) - first, value);
     agex_test::writeAll (casc, t);
     expectModelError (casc, "cascade");
-  }
+  };
+  for (const char *bad : {"1e+40", ".nan", "x"})
+    refusedWithFirst ("thresholds", bad);
+  refusedWithFirst ("levels", "1.5");
+  refusedWithFirst ("miss_rates", "0.7");
+  const std::size_t first = text.find ("thresholds: [ ") + 14;
   std::string fewer = text;
-  fewer.erase (first, value.size () + 2);  // one threshold short
+  fewer.erase (first, text.find (',', first) - first + 2);  // one threshold short
   agex_test::writeAll (casc, fewer);
-  expectModelError (casc, "cascade");
-  const std::size_t level = text.find ("levels: [ ") + 10;
-  std::string bad_level = text;
-  bad_level.replace (level, text.find (',', level) - level, "1.5");
-  agex_test::writeAll (casc, bad_level);
-  expectModelError (casc, "cascade");
-  const std::size_t rate = text.find ("miss_rates: [ ") + 14;
-  std::string bad_rate = text;
-  bad_rate.replace (rate, text.find (',', rate) - rate, "0.7");
-  agex_test::writeAll (casc, bad_rate);
   expectModelError (casc, "cascade");
   agex_test::writeAll (casc, replaceOnce (text, "cascade:\n", "cascade: 3\nold_cascade:\n"));
   expectModelError (casc, "cascade");

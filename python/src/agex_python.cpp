@@ -391,7 +391,7 @@ class PyDetector
 {
 public:
   PyDetector (std::optional<std::string> model, std::optional<std::string> forest, std::optional<std::string> mode,
-              int forest_stride)
+              int forest_stride, float cascade_min_confidence, float cascade_miss_rate)
   {
     const std::string model_path = model ? checkedPath ("model", *model) : bundledDataFile ("models/agex_bonn.yml");
     if (forest)
@@ -403,6 +403,12 @@ public:
       throw std::invalid_argument ("forest_stride must lie in [0, 8] (0: by the focal length)");
     mode_ = mode && *mode == "forest" ? agex::DetectorMode::Forest : agex::DetectorMode::Model;
     forest_stride_ = forest_stride;
+    if (!(cascade_min_confidence >= 0.f && cascade_min_confidence < 1.f))
+      throw std::invalid_argument ("cascade_min_confidence must lie in [0, 1) (0: every candidate classified in full)");
+    if (!(cascade_miss_rate >= 0.f && cascade_miss_rate <= 0.5f))
+      throw std::invalid_argument ("cascade_miss_rate must lie in [0, 0.5]");
+    cascade_min_confidence_ = cascade_min_confidence;
+    cascade_miss_rate_ = cascade_miss_rate;
     py::gil_scoped_release release;
     model_ = std::make_shared<const agex::DetectorModel> (agex::DetectorModel::load (model_path));
     model_path_ = model_path;
@@ -431,6 +437,8 @@ public:
       detector->setForest (forest_);
       detector->setMode (mode_);
       detector->setForestStride (forest_stride_);
+      detector->setCascadeMinConfidence (cascade_min_confidence_);
+      detector->setCascadeMissRate (cascade_miss_rate_);
       // A PCD carries no intrinsics: the detector estimates them (0), whatever the last frame had.
       if (frame->has_intrinsics ())
         detector->setFocalLength (static_cast<float> (frame->frame.intrinsics.fx),
@@ -562,6 +570,8 @@ private:
   agex::BodyPartForest::ConstPtr forest_;
   agex::DetectorMode mode_ = agex::DetectorMode::Model;
   int forest_stride_ = 1;
+  float cascade_min_confidence_ = agex::BodyPartDetector<pcl::PointXYZ>::kDefaultCascadeMinConfidence;
+  float cascade_miss_rate_ = agex::BodyPartDetector<pcl::PointXYZ>::kDefaultCascadeMissRate;
   std::string model_path_, forest_path_;
   mutable std::mutex mutex_;
   std::shared_ptr<agex::BodyPartDetector<pcl::PointXYZ>> last_;
@@ -685,12 +695,16 @@ PYBIND11_MODULE (_agex, m)
          "depth images must be 640x480 (the Kinect's intrinsics); width and height are a raw .u16 frame's size");
 
   py::class_<PyDetector> (m, "BodyPartDetector", "Heads, hands and feet: agex::BodyPartDetector")
-    .def (py::init<std::optional<std::string>, std::optional<std::string>, std::optional<std::string>, int> (),
+    .def (py::init<std::optional<std::string>, std::optional<std::string>, std::optional<std::string>, int, float,
+                   float> (),
           py::arg ("model") = py::none (), py::arg ("forest") = py::none (), py::arg ("mode") = py::none (),
           py::arg ("forest_stride") = 1,
+          py::arg ("cascade_min_confidence") = agex::BodyPartDetector<pcl::PointXYZ>::kDefaultCascadeMinConfidence,
+          py::arg ("cascade_miss_rate") = agex::BodyPartDetector<pcl::PointXYZ>::kDefaultCascadeMissRate,
           "model: a model file (default: the bundled agex_bonn.yml); forest: a body-part forest (an agex forest file, "
           "a PCL tree file or a directory of them); mode: 'model' (default) or 'forest' (the forest's part modes "
-          "alone); forest_stride: one evaluated pixel per stride x stride cell")
+          "alone); forest_stride: one evaluated pixel per stride x stride cell; cascade_min_confidence, "
+          "cascade_miss_rate: the classifier's soft cascade, as agex_detect's flags (0: every candidate in full)")
     .def ("detect", &PyDetector::detect, py::arg ("depth"), py::arg ("fx") = py::none (), py::arg ("fy") = py::none (),
           py::arg ("cx") = py::none (), py::arg ("cy") = py::none (), py::arg ("depth_scale") = py::none (),
           py::kw_only (), py::arg ("return_intermediate") = false,

@@ -75,6 +75,17 @@ def test_same_detections_as_agex_detect(detector, tmp_path):
     assert set(found[0]) >= {"class", "confidence", "margin", "position", "orientation", "pixel", "rank", "mesh"}
 
 
+def test_the_cascade_off_keeps_every_candidate_and_the_confident_detections(detector):
+    frame = agex.load_frame(FRAME)
+    with_cascade = detector.detect(frame)
+    full = agex.BodyPartDetector(cascade_min_confidence=0.0).detect(frame)
+    assert len(full) > len(with_cascade)
+    confident = [d for d in full if d["confidence"] >= 0.5]
+    assert len(confident) >= 3
+    for d in confident:
+        assert d in with_cascade
+
+
 def test_same_detections_from_a_numpy_array(detector, grey):
     expected = detector.detect(agex.load_frame(FRAME))
     # The frame's own grey levels back-projected as loadFrame does: the same detections exactly.
@@ -152,6 +163,10 @@ def test_bad_intrinsics_and_settings_are_refused(detector):
         detector.detect(agex.load_frame(FRAME), 525.0)
     with pytest.raises(ValueError, match="mode"):
         agex.BodyPartDetector(mode="sliding")
+    with pytest.raises(ValueError, match="cascade_min_confidence"):
+        agex.BodyPartDetector(cascade_min_confidence=1.0)
+    with pytest.raises(ValueError, match="cascade_miss_rate"):
+        agex.BodyPartDetector(cascade_miss_rate=float("nan"))
     # An empty, all-invalid frame: no detections, no error.
     assert detector.detect(np.zeros((48, 64), np.uint16), 100.0, 100.0, 32.0, 24.0) == []
 

@@ -221,22 +221,25 @@ checkTrainingSet (const std::vector<agex::DepthPatch> &patches, const std::vecto
   return set;
 }
 
-/** Every feature of every patch, once: N x (F + A) floats (the fragments, then the
-  * auxiliary features), rows in parallel (each row is independent, so the result does not
-  * depend on the threads). */
+/** Every feature of the patches listed in rows (all patches when rows is null), once:
+  * N x (F + A) floats (the fragments, then the auxiliary features), rows in parallel (each
+  * row is independent, so the result does not depend on the threads). */
 cv::Mat
 featureRows (const FragmentDictionary &dictionary, const std::vector<agex::DepthPatch> &patches,
-             const std::vector<std::vector<float>> &auxiliary, std::size_t auxiliary_count)
+             const std::vector<std::vector<float>> &auxiliary, std::size_t auxiliary_count,
+             const std::vector<std::size_t> *rows = nullptr)
 {
   const int fragments = static_cast<int> (dictionary.size ());
-  cv::Mat samples (static_cast<int> (patches.size ()), fragments + static_cast<int> (auxiliary_count), CV_32F);
+  const std::size_t count = rows ? rows->size () : patches.size ();
+  cv::Mat samples (static_cast<int> (count), fragments + static_cast<int> (auxiliary_count), CV_32F);
   cv::parallel_for_ (cv::Range (0, samples.rows), [&] (const cv::Range &range) {
-    for (int i = range.start; i < range.end; ++i)
+    for (int r = range.start; r < range.end; ++r)
     {
-      float *row = samples.ptr<float> (i);
-      dictionary.computeFeatures (patches[static_cast<std::size_t> (i)], row);
+      const std::size_t i = rows ? (*rows)[static_cast<std::size_t> (r)] : static_cast<std::size_t> (r);
+      float *row = samples.ptr<float> (r);
+      dictionary.computeFeatures (patches[i], row);
       for (std::size_t a = 0; a < auxiliary_count; ++a)
-        row[fragments + static_cast<int> (a)] = auxiliary[static_cast<std::size_t> (i)][a];
+        row[fragments + static_cast<int> (a)] = auxiliary[i][a];
     }
   });
   return samples;
@@ -927,19 +930,7 @@ PatchClassifier::fitCascade (const std::vector<agex::DepthPatch> &patches,
       rows.push_back (i);
       positive_labels.push_back (labels[i]);
     }
-  const int fragments = static_cast<int> (dictionary_.size ());
-  const std::size_t names = auxiliary_names_.size ();
-  cv::Mat samples (static_cast<int> (rows.size ()), fragments + static_cast<int> (names), CV_32F);
-  cv::parallel_for_ (cv::Range (0, samples.rows), [&] (const cv::Range &range) {
-    for (int r = range.start; r < range.end; ++r)
-    {
-      const std::size_t i = rows[static_cast<std::size_t> (r)];
-      float *row = samples.ptr<float> (r);
-      dictionary_.computeFeatures (patches[i], row);
-      for (std::size_t a = 0; a < names; ++a)
-        row[fragments + static_cast<int> (a)] = auxiliary[i][a];
-    }
-  });
+  const cv::Mat samples = featureRows (dictionary_, patches, auxiliary, auxiliary_names_.size (), &rows);
   // Fitted on a copy: a refused fit leaves this classifier as it was.
   PatchClassifier fitted = *this;
   fitted.params_ = params;

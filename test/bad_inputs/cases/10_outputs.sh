@@ -98,6 +98,8 @@ check "--cascade-miss-rate 0.6" 1 "--cascade-miss-rate must lie in \\[0, 0.5\\]"
   $D in/frame_b.png --cascade-miss-rate 0.6
 check "agex_train --cascade-for a fused model with the AGEX-point flags" 1 "--cascade-for in/model.yml: a model of the fused detector, and these flags collect agex examples" \
   $T --dataset in/dataset --out out/cascade.yml --cascade-for in/model.yml
+check "agex_train --cascade-for MODEL --out MODEL (over its own input)" 1 "model.yml: output would overwrite an input file" \
+  $T --dataset in/dataset --out in/model.yml --cascade-for in/model.yml
 
 # Reports of --shard runs whose numbers do not fit what they count, and merged results lines
 # that are not whole: each refusal names the file and the field.

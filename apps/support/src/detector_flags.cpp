@@ -38,7 +38,7 @@ detectorOptionsDescription (DetectorChoice &choice, const std::string &model_def
      "the classifier's soft cascade drops candidates it rejects at this confidence without computing all their "
      "features (0: every candidate classified in full; models trained before the cascade have none)")
     ("cascade-miss-rate",
-     po::value (&choice.cascade_miss_rate)->default_value (choice.cascade_miss_rate, "0.02")->notifier ([] (float v) {
+     po::value (&choice.cascade_miss_rate)->default_value (choice.cascade_miss_rate, "0")->notifier ([] (float v) {
        if (!(v >= 0.f && v <= 0.5f))
          throw std::runtime_error ("--cascade-miss-rate must lie in [0, 0.5]");
      }),

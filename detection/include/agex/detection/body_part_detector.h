@@ -112,7 +112,7 @@ public:
   float getCascadeMissRate () const { return cascade_miss_rate_; }
   /** A confidence far below the detections that decide AP (doc/classifier.md). */
   static constexpr float kDefaultCascadeMinConfidence = 0.05f;
-  static constexpr float kDefaultCascadeMissRate = 0.02f;
+  static constexpr float kDefaultCascadeMissRate = 0.f;  // 0.02 costs held-out hands (doc/benchmarks.md)
 
   /** \brief How Forest mode labels and names parts (agex::ForestPartSettings; default: the
     * persons as segmented, PCL-style blobs at their extremities). A fused model keeps its

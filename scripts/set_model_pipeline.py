@@ -41,7 +41,7 @@ def main(argv):
     for pair in pairs:
         key, _, value = pair.partition('=')
         # Settings added since older models were written: absent there, allowed here.
-        if key not in meta['pipeline'] and key not in ('depth_step_growth', 'hidden_people', 'working_spacing'):
+        if key not in meta['pipeline'] and key not in ('depth_step_growth', 'hidden_people', 'working_spacing', 'min_separation'):
             sys.exit(f"set_model_pipeline: unknown pipeline setting '{key}' (doc/pipeline.md)")
         meta['pipeline'][key] = json.loads(value)
     text = json.dumps(meta, separators=(',', ':'), sort_keys=True, ensure_ascii=True)

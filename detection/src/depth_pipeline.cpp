@@ -76,6 +76,7 @@ DepthPipelineParams::validate (const Namer &name) const
   checkRange (name, "min_mesh_area", min_mesh_area, 0, 10);
   checkRange (name, "working_spacing", working_spacing, 0, 0.05);
   checkRange (name, "k", k, 1, 200);
+  checkRange (name, "min_separation", min_separation, 0, 1);
   checkRange (name, "delta_orient", delta_orient, 0, 1);
 }
 
@@ -117,6 +118,7 @@ DepthPipelineParams::toJson () const
           {"min_mesh_area", min_mesh_area},
           {"working_spacing", working_spacing},
           {"k", k},
+          {"min_separation", min_separation},
           {"delta_orient", delta_orient}};
 }
 
@@ -208,6 +210,8 @@ DepthPipelineParams::fromJson (const nlohmann::json &doc, const std::string &sou
   // Models written before the working density ran at the sensor's.
   q.working_spacing = optional ("working_spacing", 0.f);
   q.k = integer ("k", -kWide, kWide);
+  // Models written before it took k points on every mesh.
+  q.min_separation = optional ("min_separation", 0.f);
   q.delta_orient = static_cast<float> (number ("delta_orient", -kWide, kWide));
   q.validate (name);
   return q;

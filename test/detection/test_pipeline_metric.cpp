@@ -466,8 +466,10 @@ TEST (MetricSettings, StoredInModelsAndOlderModelsKeepTheirPixelSettings)
   changed.spur_min_width = 0.04f;
   changed.min_mesh_area = 0.01f;
   changed.working_spacing = 0.012f;
+  changed.min_separation = 0.06f;
   const PipelineParams read = PipelineParams::fromJson (changed.toJson (), "m.yml");
   EXPECT_EQ (read.working_spacing, 0.012f);
+  EXPECT_EQ (read.min_separation, 0.06f);
   EXPECT_EQ (read.median_extent, 0.03f);
   EXPECT_EQ (read.mixed_window_angle, 0.006f);
   EXPECT_EQ (read.spur_min_width, 0.04f);
@@ -475,10 +477,12 @@ TEST (MetricSettings, StoredInModelsAndOlderModelsKeepTheirPixelSettings)
 
   // A model written before them: its pixel settings, no width rule, no area.
   nlohmann::json old = pixelSettings ().toJson ();
-  for (const char *key : {"median_extent", "mixed_window_angle", "spur_min_width", "min_mesh_area", "working_spacing"})
+  for (const char *key :
+       {"median_extent", "mixed_window_angle", "spur_min_width", "min_mesh_area", "working_spacing", "min_separation"})
     old.erase (key);
   const PipelineParams before = PipelineParams::fromJson (old, "old.yml");
   EXPECT_EQ (before.working_spacing, 0.f);  // the sensor's density, as trained
+  EXPECT_EQ (before.min_separation, 0.f);   // k AGEX points on every mesh, as trained
   EXPECT_EQ (before.median_window, 3);
   EXPECT_EQ (before.mixed_window_radius, 2);
   EXPECT_EQ (before.spur_min_width, 0.f);
@@ -497,7 +501,9 @@ TEST (MetricSettings, StoredInModelsAndOlderModelsKeepTheirPixelSettings)
                                                                               {"min_mesh_area", -1},
                                                                               {"min_mesh_area", 1e6},
                                                                               {"working_spacing", -0.001},
-                                                                              {"working_spacing", 0.06}})
+                                                                              {"working_spacing", 0.06},
+                                                                              {"min_separation", -0.01},
+                                                                              {"min_separation", 1.5}})
   {
     nlohmann::json bad = defaults.toJson ();
     bad[key] = value;

@@ -10,6 +10,7 @@
 #include <pcl/common/io.h>
 #include <pcl/console/print.h>
 
+#include <limits>
 #include <map>
 #include <random>
 #include <set>
@@ -31,11 +32,12 @@ struct AgexRun
 
 AgexRun
 runAgex (const Cloud::ConstPtr &cloud, int k, std::size_t min_mesh, Agex::Mode mode,
-         const std::vector<pcl::PointIndices> *meshes = nullptr, float delta_orient = 0.10f)
+         const std::vector<pcl::PointIndices> *meshes = nullptr, float delta_orient = 0.10f, float min_separation = 0.f)
 {
   Agex agex;
   agex.setInputCloud (cloud);
   agex.setPointsPerMesh (k);
+  agex.setMinSeparation (min_separation);
   agex.setMinMeshSize (min_mesh);
   agex.setDeltaOrient (delta_orient);
   agex.setMode (mode);
@@ -396,6 +398,53 @@ TEST (AgexSynthetic, TwoBlobsGetTwoMeshesWithTheirOwnPoints)
   EXPECT_LT (mean (angles), kMeanOrientationErrorDeg);
 }
 
+TEST (AgexSynthetic, MinSeparationStopsEachMeshAtItsExtremities)
+{
+  const Camera cam;
+  const Figure big = makeStar (Eigen::Vector2d (-0.30, 0.0), 2.0, 5, 0.18, 0.022, 0.06, -90.0);
+  const Figure small = makeStar (Eigen::Vector2d (0.33, 0.02), 2.4, 3, 0.12, 0.022, 0.05, -60.0);
+  const Cloud::Ptr cloud = rasterise ({big, small}, cam);
+  const AgexRun all = runAgex (cloud, 16, 50, Agex::Mode::Incremental);
+  ASSERT_EQ (all.points.size (), 32u);
+  // Geodesically the tips lie 0.14-0.22 m from the centre (the surface and the pixel grid
+  // lengthen the 0.18 and 0.12 m limbs); a limb's middle is at most 0.11 m from its tip and
+  // the centre.
+  constexpr float kSeparation = 0.13f;
+  for (const auto mode : {Agex::Mode::Incremental, Agex::Mode::Naive})
+  {
+    const AgexRun run = runAgex (cloud, 16, 50, mode, nullptr, 0.10f, kSeparation);
+    ASSERT_EQ (run.meshes.size (), 2u);
+    // The centroid and one point per limb tip: 6 on the five-limbed star, 4 on the other.
+    std::size_t per_mesh[2] = {0, 0};
+    for (const auto &p : run.points)
+      ++per_mesh[p.mesh];
+    EXPECT_EQ (per_mesh[0], 6u);
+    EXPECT_EQ (per_mesh[1], 4u);
+    // Each mesh's points are the first ones of the run without the limit, and the first
+    // point left out is closer than the limit to those kept.
+    std::size_t i = 0;
+    for (std::size_t j = 0; j < all.points.size (); ++j)
+    {
+      const auto &p = all.points[j];
+      if (static_cast<std::size_t> (p.rank) <= per_mesh[p.mesh])
+      {
+        ASSERT_LT (i, run.points.size ());
+        EXPECT_EQ (run.indices[i], all.indices[j]);
+        EXPECT_EQ (run.points[i].rank, p.rank);
+        if (p.rank > 1)
+          EXPECT_GE (run.points[i].geodesic_distance, kSeparation);
+        ++i;
+      }
+      else if (static_cast<std::size_t> (p.rank) == per_mesh[p.mesh] + 1)
+        EXPECT_LT (p.geodesic_distance, kSeparation) << "mesh " << p.mesh;
+    }
+    EXPECT_EQ (i, run.points.size ());
+    std::vector<double> angles;
+    expectFigureFound (run.points, 0, big, 0.03, kMaxOrientationErrorDeg, angles);
+    expectFigureFound (run.points, 1, small, 0.03, kMaxOrientationErrorDeg, angles);
+  }
+}
+
 TEST (AgexSynthetic, HolesInTheFigureStillGiveTheTips)
 {
   const Camera cam;
@@ -543,6 +592,10 @@ TEST (AgexBadInput, InvalidParametersGiveEmptyOutput)
   EXPECT_TRUE (runAgex (cloud, 0, 1, Agex::Mode::Incremental).points.empty ());
   EXPECT_TRUE (runAgex (cloud, -3, 1, Agex::Mode::Naive).points.empty ());
   EXPECT_TRUE (runAgex (cloud, 5, 1, Agex::Mode::Incremental, nullptr, -1.f).points.empty ());
+  EXPECT_TRUE (runAgex (cloud, 5, 1, Agex::Mode::Incremental, nullptr, 0.1f, -0.01f).points.empty ());
+  const float nan = std::numeric_limits<float>::quiet_NaN (), inf = std::numeric_limits<float>::infinity ();
+  EXPECT_TRUE (runAgex (cloud, 5, 1, Agex::Mode::Incremental, nullptr, 0.1f, nan).points.empty ());
+  EXPECT_TRUE (runAgex (cloud, 5, 1, Agex::Mode::Naive, nullptr, 0.1f, inf).points.empty ());
   EXPECT_FALSE (runAgex (cloud, 5, 1, Agex::Mode::Incremental).points.empty ());  // control
 }
 }  // namespace

@@ -109,6 +109,9 @@ pipelineOptionsDescription (DepthPipelineParams &p, std::vector<std::string> &st
                                  "doc/pipeline.md)");
   desc.add_options ()
     ("k", po::value (&p.k)->default_value (p.k), "AGEX points per mesh, centroid included")
+    ("min-separation", floatValue (&p.min_separation),
+     "AGEX stops on a mesh once the next point is closer than this to those found, geodesic metres "
+     "(0: k points on every mesh)")
     ("delta-connected", floatValue (&p.delta_connected),
      "largest 3D gap between connected neighbour pixels, metres")
     ("depth-step-growth", floatValue (&p.depth_step_growth),
@@ -181,6 +184,7 @@ pipelineFlagName (const std::string &key)
       {"spur_min_width", "spur-min-width"},     {"min_mesh_area", "min-mesh-area"},
       {"depth_step_growth", "depth-step-growth"},
       {"min_mesh_size", "min-mesh-size"},       {"k", "k"},
+      {"min_separation", "min-separation"},
       {"delta_orient", "delta-orient"}, {"working_spacing", "working-spacing"}};
   const auto it = flags.find (key);
   return it == flags.end () ? key : "--" + it->second;

@@ -98,6 +98,10 @@ struct DepthPipelineParams
   float working_spacing = 0.f;
   static constexpr int kMaxWorkingStride = 8;
   int k = 5;               ///< AGEX points per mesh, centroid included
+  /** AGEX stops adding points to a mesh once the next is closer than this to those found
+    * (geodesic metres; AGEXKeypoint::setMinSeparation): up to k, fewer on small meshes.
+    * 0: k on every mesh (models written before it). */
+  float min_separation = 0.f;
   float delta_orient = 0.10f;
   bool naive = false;  ///< reference AGEX: a full Dijkstra per point (not stored in models)
 

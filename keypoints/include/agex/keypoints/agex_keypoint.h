@@ -21,7 +21,10 @@ namespace agex
   *    nearest to the mesh's 3D centroid (exact for convex patches; on a body it
   *    lands on the torso);
   *  - AGEX_k adds the vertex with the largest geodesic distance to all points
-  *    found so far (ties: the lowest point index).
+  *    found so far (ties: the lowest point index), while that distance is at least
+  *    min_separation (default 0: always, up to k). The distances only shrink as points
+  *    are added, so a mesh stops once its extremities are found: a small mesh (a
+  *    detached hand, a strip of a sleeve) gets a few points, not k on one blob.
   * Distances to the growing set are kept by an incremental multi-source Dijkstra
   * (with a bucket queue, since edges are never longer than delta_connected):
   * each new point is joined to the source by a zero-cost edge, and only vertices
@@ -61,6 +64,11 @@ public:
   /** Points per mesh, the centroid included (default 5). */
   void setPointsPerMesh (int k) { k_per_mesh_ = k; }
   int getPointsPerMesh () const { return k_per_mesh_; }
+
+  /** A point is added only while its geodesic distance to the points found is at least
+    * this (metres, default 0: k points per mesh as long as the mesh has vertices left). */
+  void setMinSeparation (float metres) { min_separation_ = metres; }
+  float getMinSeparation () const { return min_separation_; }
 
   /** Edge length limit in metres for the geodesic graph (default 0.05). */
   void setDeltaConnected (float metres) { delta_connected_ = metres; }
@@ -134,6 +142,7 @@ private:
   float delta_connected_growth_ = 0.f;
   float max_edge_ = 0.f;  ///< the longest edge of the mesh being processed (the bucket queue's range)
   float delta_orient_ = 0.10f;
+  float min_separation_ = 0.f;
   std::size_t min_mesh_size_ = 50;
   Mode mode_ = Mode::Incremental;
   std::vector<pcl::PointIndices> meshes_;

@@ -485,6 +485,7 @@ agex::DepthPipeline<PointT>::compute (DepthPipelineResult &result)
     agex.setInputCloud (filtered_);
     agex.setMeshes (result.meshes);
     agex.setPointsPerMesh (params.k);
+    agex.setMinSeparation (params.min_separation);
     agex.setDeltaConnected (params.delta_connected);
     agex.setDeltaConnectedGrowth (1.5f * params.depth_step_growth);
     agex.setDeltaOrient (params.delta_orient);

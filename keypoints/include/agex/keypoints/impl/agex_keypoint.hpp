@@ -25,11 +25,12 @@ agex::AGEXKeypoint<PointInT, PointOutT>::initCompute ()
     return false;
   }
   if (k_per_mesh_ < 1 || !(delta_connected_ > 0.f) || !(delta_orient_ >= 0.f) || !(delta_connected_growth_ >= 0.f) ||
-      !std::isfinite (delta_connected_growth_))
+      !std::isfinite (delta_connected_growth_) || !(min_separation_ >= 0.f) || !std::isfinite (min_separation_))
   {
     PCL_ERROR ("[agex::%s::initCompute] Invalid parameters: k %d (>= 1), delta_connected %g (> 0), "
-               "its growth %g (finite, >= 0), delta_orient %g (>= 0).\n", getClassName ().c_str (), k_per_mesh_,
-               delta_connected_, delta_connected_growth_, delta_orient_);
+               "its growth %g (finite, >= 0), delta_orient %g (>= 0), min_separation %g (finite, >= 0).\n",
+               getClassName ().c_str (), k_per_mesh_, delta_connected_, delta_connected_growth_, delta_orient_,
+               min_separation_);
     return false;
   }
   if (user_meshes_)
@@ -205,6 +206,8 @@ agex::AGEXKeypoint<PointInT, PointOutT>::runMesh (const MeshGraph &graph, int me
       }
     if (farthest < 0)
       break;  // every reachable vertex is already a point: k exceeds the mesh
+    if (far_distance < min_separation_)
+      break;  // what is left are bumps beside the points found, no extremities
 
     int reached = farthest;
     while (parent_[reached] >= 0 && far_distance - distance_[reached] < delta_orient_)

@@ -3,6 +3,7 @@
 
 #include <agex/apps/command_line.h>
 #include <agex/apps/landmarks.h>
+#include <agex/apps/output_guard.h>
 #include <agex/landmarks/landmark_evaluation.h>
 #include <agex/landmarks/landmark_training.h>
 
@@ -19,17 +20,23 @@ namespace po = boost::program_options;
 int
 main (int argc, char **argv)
 {
-  std::vector<std::string> dataset_paths;
+  std::vector<std::string> dataset_paths, combined;
   std::string model_path, detector_path;
   agex::ShapePredictorTrainingParams shape_params;
   agex::PeopleDetectorTraining detector_training;
   agex::apps::PeopleCropChoice crop_choice;
   po::options_description general ("agex_landmarks_train --dataset XML --out MODEL [--detector-out FILE] [options]\n"
-                                   "Trains the 180-landmark contour shape predictor (and the people detector)");
+                                   "agex_landmarks_train --combine FILE[@OFFSET] --combine ... --detector-out FILE\n"
+                                   "Trains the 180-landmark contour shape predictor (and the people detector), or writes\n"
+                                   "trained people detectors as one");
   general.add_options () ("help,h", "show this help")
-    ("dataset", po::value (&dataset_paths)->multitoken ()->required (), "imglab XML files with contour landmarks (agex_annotate)")
-    ("out", po::value (&model_path)->required (), "shape predictor model to write")
-    ("detector-out", po::value (&detector_path), "also train the people detector and write it here");
+    ("dataset", po::value (&dataset_paths)->multitoken (), "imglab XML files with contour landmarks (agex_annotate)")
+    ("out", po::value (&model_path), "shape predictor model to write")
+    ("detector-out", po::value (&detector_path), "also train the people detector and write it here")
+    ("combine", po::value (&combined)->composing (),
+     "FILE or FILE@OFFSET (repeatable, 1 to 8): instead of training, write these trained people detectors to "
+     "--detector-out as one (each member's detections at the threshold + OFFSET, in [-5, 5], count; their scores "
+     "less OFFSET): an ensemble, or one detector with its operating threshold");
   po::options_description all;
   all.add (general).add (agex::apps::shapeTrainerOptions (shape_params)).add (agex::apps::detectorTrainerOptions (detector_training));
   all.add (agex::apps::detectorCropOptions (crop_choice, detector_training));
@@ -37,6 +44,36 @@ main (int argc, char **argv)
   {
     if (!agex::apps::parseCommandLine (argc, argv, all, {}))
       return 0;
+    if (!combined.empty ())
+    {
+      if (!dataset_paths.empty () || !model_path.empty () || !crop_choice.folder.empty ())
+        throw std::runtime_error ("--combine trains nothing: give no --dataset, --out or --detector-crops with it");
+      if (detector_path.empty ())
+        throw std::runtime_error ("--combine writes the detectors as one to --detector-out: give it");
+      agex::InputFiles read;
+      for (const std::string &item : combined)
+        read.add (item.substr (0, item.rfind ('@')));
+      agex::apps::checkOutputPath (detector_path, "--detector-out", [] (const std::string &path) {
+        try
+        {
+          agex::PeopleDetector::load (path);
+          return std::string ();
+        }
+        catch (const std::exception &)
+        {
+          return std::string ("exists and is not a people detector");
+        }
+      }, read);
+      std::vector<agex::PeopleDetector> members;
+      std::vector<double> offsets;
+      agex::apps::combineDetectorFiles (combined, "--combine", members, offsets);
+      const agex::PeopleDetector detector = agex::PeopleDetector::combine (std::move (members), offsets);
+      detector.save (detector_path);
+      std::cout << detector_path << ": " << detector.description () << "\n";
+      return 0;
+    }
+    if (dataset_paths.empty () || model_path.empty ())
+      throw std::runtime_error ("give --dataset and --out (or --combine)");
     if (!detector_path.empty () &&
         std::filesystem::weakly_canonical (detector_path) == std::filesystem::weakly_canonical (model_path))
       throw std::runtime_error (detector_path + ": --detector-out and --out name the same file");

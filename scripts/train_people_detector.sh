@@ -17,7 +17,10 @@
 #     full size yet: its first iterations took 30 s each on the shared machine (a fifth of the
 #     data: 8 minutes in all). The INRIA crops are for training only: never copy them into the
 #     repository.
-# Usage: [RECIPE=ccp|ccp+inria] scripts/train_people_detector.sh [OUT_FILE] [BUILD_DIR] [WORK_DIR]
+#   RECIPE=inria: the same but without the CCP people (neither the photos as they are nor their
+#     people pasted): INRIA's crops pasted into the photos, whose own people are ignored, and the
+#     bands; the street member of an ensemble with the bundled detector (--detector-also).
+# Usage: [RECIPE=ccp|ccp+inria|inria] scripts/train_people_detector.sh [OUT_FILE] [BUILD_DIR] [WORK_DIR]
 # (default OUT_FILE: data/models/agex_people_detector.svm; an earlier detector there is replaced,
 # any other file refused by agex_landmarks_train).
 set -euo pipefail
@@ -33,8 +36,8 @@ CCP="$DATA/ccp"
 INRIA="$DATA/inria_pos/images"
 case "$RECIPE" in
   ccp) needs=("$CCP/photos" "$CCP/masks") ;;
-  ccp+inria) needs=("$CCP/photos" "$CCP/masks" "$INRIA") ;;
-  *) echo "train_people_detector: RECIPE must be ccp or ccp+inria, not '$RECIPE'" >&2; exit 1 ;;
+  ccp+inria | inria) needs=("$CCP/photos" "$CCP/masks" "$INRIA") ;;
+  *) echo "train_people_detector: RECIPE must be ccp, ccp+inria or inria, not '$RECIPE'" >&2; exit 1 ;;
 esac
 python3 -c "import sys; c = float(sys.argv[1]); sys.exit(0 if 0 < c <= 1e6 else 1)" "$C" 2> /dev/null ||
   { echo "train_people_detector: AGEX_DETECTOR_C must be a number in (0, 1e6], not '$C'" >&2; exit 1; }
@@ -49,7 +52,7 @@ if [ "$RECIPE" = ccp ]; then
 else
   HELD_OUT=$(for i in $(seq 5 5 900); do printf "%04d.jpg " "$i"; done)
 fi
-DATASET="$WORK/ccp_train_${RECIPE/+/_}.xml"
+DATASET="$WORK/ccp_train_$([ "$RECIPE" = ccp ] && echo ccp || echo fold0).xml"
 # shellcheck disable=SC2086 # HELD_OUT is a list of file names
 [ -f "$DATASET" ] ||
   "$BIN/agex_annotate" masks --images "$CCP/photos" --masks "$CCP/masks" --labels-excluded 2,33,56 --skip $HELD_OUT \
@@ -59,7 +62,9 @@ STUB=(--dataset "$DATASET" --out "$WORK/stub.dat" --oversampling 1 --cascade-dep
 if [ "$RECIPE" = ccp ]; then
   "$BIN/agex_landmarks_train" "${STUB[@]}" --detector-out "$OUT" --detector-c 20
 else
-  "$BIN/agex_landmarks_train" "${STUB[@]}" --detector-out "$OUT" --detector-c "$C" \
+  CCP_PEOPLE=()
+  [ "$RECIPE" = inria ] && CCP_PEOPLE=(--detector-paste-people 0 --detector-originals 0)
+  "$BIN/agex_landmarks_train" "${STUB[@]}" "${CCP_PEOPLE[@]}" --detector-out "$OUT" --detector-c "$C" \
     --detector-loss-missed "$LOSS" --detector-epsilon "$(python3 -c "import sys; print(0.01 * float(sys.argv[1]))" "$LOSS")" \
     --detector-crops "$INRIA" --detector-crops-box 24,32,48,96 --detector-crops-held-out 0 \
     --detector-crops-min-height 72 --detector-crops-max-height 200 --detector-backgrounds 1 \

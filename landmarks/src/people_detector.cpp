@@ -16,6 +16,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
@@ -39,6 +41,12 @@ using detail::toDlib;
 using detail::toCv;
 using Scanner = dlib::scan_fhog_pyramid<dlib::pyramid_down<6>>;
 constexpr char kMagic[] = "agex_people_detector_fhog 2";
+// Several trained detectors with their offsets (PeopleDetector::combine) in one file.
+constexpr char kEnsembleMagic[] = "agex_people_detector_fhog_ensemble 1";
+constexpr std::uint32_t kMaxEnsembleMembers = 8;
+// A trained 48x96 detector is 35 KB; no file near this is a detector, so nothing larger is
+// decoded (dlib allocates what a damaged file claims).
+constexpr std::uintmax_t kMaxDetectorFileBytes = std::uintmax_t (64) << 20;
 constexpr double kPeopleNmsIoU = 0.5, kPeopleNmsCovered = 0.95;
 // OpenCV's people: the person fills the middle 0.75 of its 64x128 window's height.
 constexpr double kOpenCvPersonHeight = 0.75, kOpenCvPersonAspect = 0.41;
@@ -219,8 +227,9 @@ PeopleDetector::openCvDefault (double scale)
 PeopleDetector
 PeopleDetector::combine (std::vector<PeopleDetector> members, const std::vector<double> &offsets)
 {
-  if (members.empty () || members.size () != offsets.size ())
-    throw std::invalid_argument ("people detector ensemble: one offset per member, at least one member");
+  if (members.empty () || members.size () != offsets.size () || members.size () > kMaxEnsembleMembers)
+    throw std::invalid_argument ("people detector ensemble: one offset per member, 1 to " +
+                                 std::to_string (kMaxEnsembleMembers) + " members");
   for (std::size_t i = 0; i < members.size (); ++i)
   {
     if (!members[i].impl_)
@@ -238,45 +247,94 @@ PeopleDetector::combine (std::vector<PeopleDetector> members, const std::vector<
 PeopleDetector
 PeopleDetector::load (const std::string &path)
 {
+  std::error_code error;
+  const std::uintmax_t bytes = std::filesystem::file_size (path, error);
+  if (!error && bytes > kMaxDetectorFileBytes)
+    throw std::runtime_error (path + ": " + std::to_string (bytes) + " bytes, more than a people detector's " +
+                              std::to_string (kMaxDetectorFileBytes));
   std::ifstream in (path, std::ios::binary);
   if (!in)
     throw std::runtime_error (path + ": cannot open the people detector");
-  std::string magic;
-  std::getline (in, magic);
-  if (magic != kMagic)
-    throw std::runtime_error (path + ": not an agex people detector (expected the header '" + std::string (kMagic) +
-                              "')");
-  PeopleDetector detector;
-  detector.impl_ = std::make_unique<Impl> ();
-  try
-  {
+  const auto readTrained = [] (std::istream &in, Impl &impl) {
     int upsample = 0;
     double scale = 1.0;
     dlib::deserialize (upsample, in);
     dlib::deserialize (scale, in);
-    dlib::deserialize (detector.impl_->fhog, in);
     if (upsample < 0 || upsample > 4 || !(scale > 0.05 && scale <= 4.0))
-      throw std::runtime_error ("bad upsample or scale");
-    detector.impl_->upsample = upsample;
-    detector.impl_->scale = scale;
+      throw std::runtime_error ("upsample " + std::to_string (upsample) + " or scale " + std::to_string (scale) +
+                                " out of range (0-4, (0.05, 4])");
+    dlib::deserialize (impl.fhog, in);
+    impl.upsample = upsample;
+    impl.scale = scale;
+  };
+  std::string magic;
+  std::getline (in, magic);
+  if (magic != kMagic && magic != kEnsembleMagic)
+    throw std::runtime_error (path + ": not an agex people detector (expected the header '" + std::string (kMagic) +
+                              "' or '" + kEnsembleMagic + "')");
+  try
+  {
+    if (magic == kMagic)
+    {
+      PeopleDetector detector;
+      detector.impl_ = std::make_unique<Impl> ();
+      readTrained (in, *detector.impl_);
+      return detector;
+    }
+    std::uint32_t count = 0;
+    dlib::deserialize (count, in);
+    if (count < 1 || count > kMaxEnsembleMembers)
+      throw std::runtime_error ("an ensemble of " + std::to_string (count) + " members (1 to " +
+                                std::to_string (kMaxEnsembleMembers) + ")");
+    std::vector<PeopleDetector> members (count);
+    std::vector<double> offsets (count, 0.0);
+    for (std::uint32_t i = 0; i < count; ++i)
+    {
+      dlib::deserialize (offsets[i], in);
+      if (!(offsets[i] >= -5.0 && offsets[i] <= 5.0))
+        throw std::runtime_error ("member " + std::to_string (i) + "'s offset " + std::to_string (offsets[i]) +
+                                  " outside [-5, 5]");
+      members[i].impl_ = std::make_unique<Impl> ();
+      readTrained (in, *members[i].impl_);
+    }
+    return combine (std::move (members), offsets);
   }
   catch (const std::exception &e)
   {
     throw std::runtime_error (path + ": damaged people detector (" + std::string (e.what ()) + ")");
   }
-  return detector;
 }
 
 void
 PeopleDetector::save (const std::string &path) const
 {
-  if (!impl_ || impl_->opencv_default || !impl_->members.empty ())
-    throw std::logic_error ("PeopleDetector::save: only trained detectors can be saved (not OpenCV's, not an ensemble)");
+  if (!impl_ || impl_->opencv_default)
+    throw std::logic_error ("PeopleDetector::save: only trained detectors and their ensembles can be saved (not OpenCV's)");
+  const auto writeTrained = [] (const Impl &impl, std::ostream &out) {
+    dlib::serialize (impl.upsample, out);
+    dlib::serialize (impl.scale, out);
+    dlib::serialize (impl.fhog, out);
+  };
   std::ostringstream out;
-  out << kMagic << "\n";
-  dlib::serialize (impl_->upsample, out);
-  dlib::serialize (impl_->scale, out);
-  dlib::serialize (impl_->fhog, out);
+  if (impl_->members.empty ())
+  {
+    out << kMagic << "\n";
+    writeTrained (*impl_, out);
+  }
+  else
+  {
+    for (const PeopleDetector &member : impl_->members)
+      if (!member.impl_ || member.impl_->opencv_default || !member.impl_->members.empty ())
+        throw std::logic_error ("PeopleDetector::save: an ensemble's members must be trained detectors (not OpenCV's, "
+                                "not ensembles)");
+    out << kEnsembleMagic << "\n";
+    dlib::serialize (static_cast<std::uint32_t> (impl_->members.size ()), out);
+    for (std::size_t i = 0; i < impl_->members.size (); ++i)
+    {
+      dlib::serialize (impl_->offsets[i], out);
+      writeTrained (*impl_->members[i].impl_, out);
+    }
+  }
   writeFileAtomic (path, out.str ());
 }
 

@@ -287,6 +287,7 @@ check "agex_eval compare with a detect flag" 1 "--forest applies to agex_eval de
 # Parsers that would recurse without bound, and inputs that would block.
 cp "$SRC/test/fuzz/regressions/model/nested_100000_deep_overflows_opencv_stack.yml" in/nested_model.yml
 cp "$SRC/test/fuzz/regressions/imglab_xml/nested_50000_deep_overflowed_the_stack.xml" in/nested_imglab.xml
+cp "$SRC/data/models/agex_people_detector.svm" in/people.svm
 mkdir -p fifo && mkfifo fifo/frame.u16
 (cd in && find . -type f -print0 | sort -z | xargs -0 sha256sum) > inputs.sha256
 check "model nested 100,000 deep ([[[...)" 1 "nested_model.yml:3: nested more than 1000 levels deep" $D in/frame.png --model in/nested_model.yml --json out/a.json
@@ -295,6 +296,14 @@ check "the same model for agex_eval detect" 1 "nested_model.yml:3: nested more t
 if [ -x "$BIN/agex_landmarks_train" ]; then
   check "imglab XML nested 50,000 deep, agex_landmarks_train" 1 "nested_imglab.xml:.*nested more than 64" $BIN/agex_landmarks_train --dataset in/nested_imglab.xml --out out/shape.dat
   check "the same XML for agex_landmarks_eval" 1 "nested_imglab.xml:.*nested more than 64" $BIN/agex_landmarks_eval --dataset in/nested_imglab.xml --model out/shape.dat
+  check "agex_landmarks_train --combine, an offset of 7" 1 "--combine .*@7: the offset after '@' must be a number in \\[-5, 5\\]" \
+    $BIN/agex_landmarks_train --combine in/people.svm --combine in/people.svm@7 --detector-out out/both.svm
+  check "agex_landmarks_train --combine with --dataset" 1 "--combine trains nothing" \
+    $BIN/agex_landmarks_train --combine in/people.svm --dataset in/nested_imglab.xml --out out/shape.dat --detector-out out/both.svm
+  check "agex_landmarks_train --combine writing over a member" 1 "would overwrite an input" \
+    $BIN/agex_landmarks_train --combine in/model.yml@0 --combine in/model.yml --detector-out in/model.yml
+  check "agex_landmarks_train --combine of a file that is no detector" 1 "model.yml: not an agex people detector" \
+    $BIN/agex_landmarks_train --combine in/model.yml --detector-out out/both.svm
 fi
 check "a .u16 frame that is a FIFO" 1 "frame.u16: is a FIFO \\(named pipe\\), not a regular file" timeout 20 $D fifo/frame.u16 --json out/a.json
 
@@ -312,6 +321,7 @@ check "model whose median_window is 1e5" 1 "median_model.yml.*median_window" $D 
 check "model whose k is 1e8" 1 "k_model.yml.*\\bk\\b" $D in/frame.png --model in/k_model.yml --json out/a.json
 check "model whose delta_connected is -1" 1 "delta_model.yml.*delta_connected" $D in/frame.png --model in/delta_model.yml --json out/a.json
 check "--delta-connected 100" 1 "--delta-connected" $K in/frame.png --delta-connected 100
+check "--min-separation -0.1" 1 "--min-separation" $K in/frame.png --min-separation -0.1
 
 # Results that would be wrong without a word.
 head -c $((320 * 240 * 2)) /dev/zero | tr '\0' '\7' > in/wall_320x240.u16

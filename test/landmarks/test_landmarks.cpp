@@ -739,6 +739,74 @@ TEST (PeopleDetector, EnsembleMergesItsMembersDetections)
   EXPECT_THROW (agex::PeopleDetector::combine (std::move (saved), {0.0}).save ("/nonexistent/x.svm"), std::logic_error);
 }
 
+// An ensemble written to a file is the same ensemble read back: members, offsets, detections.
+// Damaged ensemble files are refused naming the file; an ensemble holds 1 to 8 members.
+TEST (PeopleDetector, EnsembleFileKeepsItsMembersAndOffsets)
+{
+  const cv::Mat image = cv::imread (std::string (AGEX_SOURCE_DIR) + "/data/images/five_people.jpg");
+  ASSERT_FALSE (image.empty ());
+  const std::string bundled = std::string (AGEX_SOURCE_DIR) + "/data/models/agex_people_detector.svm";
+  std::vector<agex::PeopleDetector> members;
+  members.push_back (agex::PeopleDetector::load (bundled));
+  members.push_back (agex::PeopleDetector::load (bundled));
+  const agex::PeopleDetector ensemble = agex::PeopleDetector::combine (std::move (members), {0.0, -0.4});
+  const auto expected = ensemble.detect (image, -0.3);
+  ASSERT_FALSE (expected.empty ());
+
+  const fs::path dir = tempDir ("ensemble");
+  const std::string path = (dir / "both.svm").string ();
+  ensemble.save (path);
+  const agex::PeopleDetector loaded = agex::PeopleDetector::load (path);
+  EXPECT_EQ (loaded.description (), ensemble.description ());
+  const auto found = loaded.detect (image, -0.3);
+  ASSERT_EQ (found.size (), expected.size ());
+  for (std::size_t i = 0; i < found.size (); ++i)
+  {
+    EXPECT_EQ (found[i].box, expected[i].box);
+    EXPECT_DOUBLE_EQ (found[i].score, expected[i].score);
+  }
+  // The member at -0.4 finds more than the bundled detector alone at the same threshold.
+  EXPECT_GT (found.size (), agex::PeopleDetector::load (bundled).detect (image, -0.3).size ());
+
+  // The member count follows the header line as dlib's integer: a length byte, then the value.
+  const std::string bytes = readAll (path);
+  const std::size_t count_at = bytes.find ('\n') + 1;
+  ASSERT_EQ (bytes.substr (count_at, 2), std::string ("\x01\x02", 2));
+  const auto expectRefused = [&] (const std::string &name, const std::string &content, const std::string &why) {
+    const std::string damaged = (dir / name).string ();
+    writeAll (damaged, content);
+    try
+    {
+      agex::PeopleDetector::load (damaged);
+      ADD_FAILURE () << name << " loaded";
+    }
+    catch (const std::runtime_error &e)
+    {
+      EXPECT_NE (std::string (e.what ()).find (damaged), std::string::npos) << e.what ();
+      EXPECT_NE (std::string (e.what ()).find (why), std::string::npos) << e.what ();
+    }
+  };
+  std::string none = bytes, nine = bytes;
+  none[count_at + 1] = '\0';
+  nine[count_at + 1] = '\x09';
+  expectRefused ("none.svm", none, "0 members");
+  expectRefused ("nine.svm", nine, "9 members");
+  expectRefused ("cut.svm", bytes.substr (0, bytes.size () / 2), "damaged");
+  expectRefused ("header.svm", "agex_people_detector_fhog_ensemble 1\n", "damaged");
+
+  std::vector<agex::PeopleDetector> many;
+  std::vector<double> offsets (9, 0.0);
+  for (int i = 0; i < 9; ++i)
+    many.push_back (agex::PeopleDetector::load (bundled));
+  EXPECT_THROW (agex::PeopleDetector::combine (std::move (many), offsets), std::invalid_argument);
+  std::vector<agex::PeopleDetector> with_opencv;
+  with_opencv.push_back (agex::PeopleDetector::load (bundled));
+  with_opencv.push_back (agex::PeopleDetector::openCvDefault ());
+  EXPECT_THROW (agex::PeopleDetector::combine (std::move (with_opencv), {0.0, 0.0}).save (path), std::logic_error);
+  EXPECT_EQ (readAll (path), bytes) << "a refused save leaves the file as it was";
+  fs::remove_all (dir);
+}
+
 // The loss per missed person is bounded: 0 would make every person free to miss, a huge value
 // every false detection free.
 TEST (PeopleDetector, LossPerMissedPersonOutsideItsRangeIsRefused)

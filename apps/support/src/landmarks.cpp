@@ -192,7 +192,18 @@ loadPeopleDetector (const PeopleDetectorChoice &choice)
   std::vector<PeopleDetector> members;
   std::vector<double> offsets{0.0};
   members.push_back (std::move (first));
-  for (const std::string &item : choice.also)
+  combineDetectorFiles (choice.also, "--detector-also", members, offsets);
+  return PeopleDetector::combine (std::move (members), offsets);
+}
+
+void
+combineDetectorFiles (const std::vector<std::string> &items, const std::string &flag,
+                      std::vector<PeopleDetector> &members, std::vector<double> &offsets)
+{
+  if (members.size () + items.size () > 8)
+    throw std::runtime_error (flag + ": at most 8 detectors run as one, not " +
+                              std::to_string (members.size () + items.size ()));
+  for (const std::string &item : items)
   {
     const std::size_t at = item.rfind ('@');
     double offset = 0.0;
@@ -200,12 +211,11 @@ loadPeopleDetector (const PeopleDetectorChoice &choice)
     {
       std::istringstream in (item.substr (at + 1));
       if (!(in >> offset) || !(in >> std::ws).eof () || !(offset >= -5.0 && offset <= 5.0))
-        throw std::runtime_error ("--detector-also " + item + ": the offset after '@' must be a number in [-5, 5]");
+        throw std::runtime_error (flag + " " + item + ": the offset after '@' must be a number in [-5, 5]");
     }
     members.push_back (PeopleDetector::load (item.substr (0, at)));
     offsets.push_back (offset);
   }
-  return PeopleDetector::combine (std::move (members), offsets);
 }
 
 LandmarkInputs

@@ -84,13 +84,18 @@ public:
     * to detect ()'s), their scores shifted by -offsets[i] so that every member's threshold is
     * 0, merged and suppressed as one detector's. Detectors trained on different photos (CCP's
     * fashion photos, INRIA's street crops) find different people; scores of different SVMs are
-    * only roughly comparable, hence the offsets. Not saved: combined when loaded.
-    * \throws std::invalid_argument for no member, an empty one, a count mismatch or an offset
-    * outside [-5, 5] */
+    * only roughly comparable, hence the offsets. One member with an offset is a detector with
+    * its own operating threshold. save () writes an ensemble of trained members as one file.
+    * \throws std::invalid_argument for no member or more than 8, an empty one, a count
+    * mismatch or an offset outside [-5, 5] */
   static PeopleDetector combine (std::vector<PeopleDetector> members, const std::vector<double> &offsets);
-  /** \throws std::runtime_error naming the file when it is missing or not a detector */
+  /** A trained detector or an ensemble of them (save ()); at most 8 members, offsets in
+    * [-5, 5], files up to 64 MB.
+    * \throws std::runtime_error naming the file when it is missing, not a detector or damaged */
   static PeopleDetector load (const std::string &path);
-  /** Writes the trained detector atomically. \throws std::logic_error for the fallback */
+  /** Writes the trained detector, or the ensemble of trained detectors with their offsets,
+    * atomically. \throws std::logic_error for OpenCV's detector or an ensemble holding it or
+    * another ensemble */
   void save (const std::string &path) const;
 
   bool isOpenCvDefault () const;

@@ -70,6 +70,12 @@ constexpr const char *kOpenCvHogName = "opencv-hog";
 boost::program_options::options_description detectorChoiceOptions (PeopleDetectorChoice &choice);
 /** \throws std::runtime_error for contradicting flags or a file that is no detector */
 PeopleDetector loadPeopleDetector (const PeopleDetectorChoice &choice);
+/** \brief Appends the detectors of items (each FILE or FILE@OFFSET, the offset in [-5, 5],
+  * default 0) and their offsets to members and offsets, for PeopleDetector::combine.
+  * \throws std::runtime_error naming flag and the item for a bad offset, a file that is no
+  * detector, or more than 8 members in all */
+void combineDetectorFiles (const std::vector<std::string> &items, const std::string &flag,
+                           std::vector<PeopleDetector> &members, std::vector<double> &offsets);
 
 /** The images a landmark app reads, and every file it reads (no output may land on one). */
 struct LandmarkInputs

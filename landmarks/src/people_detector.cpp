@@ -230,17 +230,37 @@ PeopleDetector::combine (std::vector<PeopleDetector> members, const std::vector<
   if (members.empty () || members.size () != offsets.size () || members.size () > kMaxEnsembleMembers)
     throw std::invalid_argument ("people detector ensemble: one offset per member, 1 to " +
                                  std::to_string (kMaxEnsembleMembers) + " members");
+  // A member that is an ensemble itself (a detector file with its own threshold) gives its
+  // members, their offsets added: one level, so that any ensemble can be saved.
+  std::vector<PeopleDetector> flat;
+  std::vector<double> flat_offsets;
   for (std::size_t i = 0; i < members.size (); ++i)
   {
     if (!members[i].impl_)
       throw std::invalid_argument ("people detector ensemble: an empty member");
-    if (!(offsets[i] >= -5.0 && offsets[i] <= 5.0))
-      throw std::invalid_argument ("people detector ensemble: offsets must lie in [-5, 5]");
+    if (members[i].impl_->members.empty ())
+    {
+      flat.push_back (std::move (members[i]));
+      flat_offsets.push_back (offsets[i]);
+      continue;
+    }
+    Impl &inner = *members[i].impl_;
+    for (std::size_t j = 0; j < inner.members.size (); ++j)
+    {
+      flat.push_back (std::move (inner.members[j]));
+      flat_offsets.push_back (offsets[i] + inner.offsets[j]);
+    }
   }
+  if (flat.size () > kMaxEnsembleMembers)
+    throw std::invalid_argument ("people detector ensemble: " + std::to_string (flat.size ()) + " members in all, at most " +
+                                 std::to_string (kMaxEnsembleMembers));
+  for (const double offset : flat_offsets)
+    if (!(offset >= -5.0 && offset <= 5.0))
+      throw std::invalid_argument ("people detector ensemble: offsets (a member's own added) must lie in [-5, 5]");
   PeopleDetector detector;
   detector.impl_ = std::make_unique<Impl> ();
-  detector.impl_->members = std::move (members);
-  detector.impl_->offsets = offsets;
+  detector.impl_->members = std::move (flat);
+  detector.impl_->offsets = std::move (flat_offsets);
   return detector;
 }
 
@@ -324,9 +344,8 @@ PeopleDetector::save (const std::string &path) const
   else
   {
     for (const PeopleDetector &member : impl_->members)
-      if (!member.impl_ || member.impl_->opencv_default || !member.impl_->members.empty ())
-        throw std::logic_error ("PeopleDetector::save: an ensemble's members must be trained detectors (not OpenCV's, "
-                                "not ensembles)");
+      if (!member.impl_ || member.impl_->opencv_default)
+        throw std::logic_error ("PeopleDetector::save: an ensemble's members must be trained detectors (not OpenCV's)");
     out << kEnsembleMagic << "\n";
     dlib::serialize (static_cast<std::uint32_t> (impl_->members.size ()), out);
     for (std::size_t i = 0; i < impl_->members.size (); ++i)

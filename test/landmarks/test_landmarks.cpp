@@ -799,6 +799,21 @@ TEST (PeopleDetector, EnsembleFileKeepsItsMembersAndOffsets)
   for (int i = 0; i < 9; ++i)
     many.push_back (agex::PeopleDetector::load (bundled));
   EXPECT_THROW (agex::PeopleDetector::combine (std::move (many), offsets), std::invalid_argument);
+  // An ensemble as a member gives its members, offsets added; saved as one level.
+  std::vector<agex::PeopleDetector> nested;
+  nested.push_back (agex::PeopleDetector::load (path));
+  nested.push_back (agex::PeopleDetector::load (bundled));
+  const agex::PeopleDetector three = agex::PeopleDetector::combine (std::move (nested), {0.2, 0.0});
+  const std::string text = three.description ();
+  EXPECT_EQ (text.rfind ("ensemble of 3:", 0), 0u) << text;
+  EXPECT_NE (text.find ("offset 0.200000; "), std::string::npos) << text;
+  EXPECT_NE (text.find ("offset -0.200000; "), std::string::npos) << text;
+  const std::string three_path = (dir / "three.svm").string ();
+  three.save (three_path);
+  EXPECT_EQ (agex::PeopleDetector::load (three_path).description (), text);
+  std::vector<agex::PeopleDetector> too_low;
+  too_low.push_back (agex::PeopleDetector::load (path));
+  EXPECT_THROW (agex::PeopleDetector::combine (std::move (too_low), {-4.8}), std::invalid_argument);  // -0.4 - 4.8
   std::vector<agex::PeopleDetector> with_opencv;
   with_opencv.push_back (agex::PeopleDetector::load (bundled));
   with_opencv.push_back (agex::PeopleDetector::openCvDefault ());

@@ -85,17 +85,18 @@ public:
     * 0, merged and suppressed as one detector's. Detectors trained on different photos (CCP's
     * fashion photos, INRIA's street crops) find different people; scores of different SVMs are
     * only roughly comparable, hence the offsets. One member with an offset is a detector with
-    * its own operating threshold. save () writes an ensemble of trained members as one file.
-    * \throws std::invalid_argument for no member or more than 8, an empty one, a count
-    * mismatch or an offset outside [-5, 5] */
+    * its own operating threshold. A member that is an ensemble gives its members, their
+    * offsets added (ensembles are one level deep). save () writes an ensemble of trained
+    * members as one file.
+    * \throws std::invalid_argument for no member or more than 8 in all, an empty one, a count
+    * mismatch or an offset outside [-5, 5] (a member's own added) */
   static PeopleDetector combine (std::vector<PeopleDetector> members, const std::vector<double> &offsets);
   /** A trained detector or an ensemble of them (save ()); at most 8 members, offsets in
     * [-5, 5], files up to 64 MB.
     * \throws std::runtime_error naming the file when it is missing, not a detector or damaged */
   static PeopleDetector load (const std::string &path);
   /** Writes the trained detector, or the ensemble of trained detectors with their offsets,
-    * atomically. \throws std::logic_error for OpenCV's detector or an ensemble holding it or
-    * another ensemble */
+    * atomically. \throws std::logic_error for OpenCV's detector or an ensemble holding it */
   void save (const std::string &path) const;
 
   bool isOpenCvDefault () const;

@@ -19,6 +19,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 #include <tuple>
@@ -117,7 +118,47 @@ struct PeopleDetector::Impl
   cv::HOGDescriptor hog;
   std::vector<PeopleDetector> members;  ///< an ensemble (combine ()) when not empty
   std::vector<double> offsets;
+  /** Trained members with one scale and upsampling: their HOG pyramid is computed once
+    * (dlib::evaluate_detectors), each detector's own suppression kept. */
+  struct SharedPyramid
+  {
+    int upsample = 0;
+    double scale = 1.0;
+    std::vector<std::size_t> members;                  ///< indices into members
+    std::vector<dlib::object_detector<Scanner>> fhog;  ///< copies of their detectors, in that order
+  };
+  std::vector<SharedPyramid> shared;  ///< groups of two or more; the other members run alone
 };
+
+namespace
+{
+/** The grey image a trained detector scans: resized by scale, doubled upsample times. Empty if
+  * it shrinks to nothing. */
+void
+scanImage (const cv::Mat &grey, double scale, int upsample, dlib::array2d<unsigned char> &out)
+{
+  out.clear ();
+  const cv::Size scaled_size (cvRound (grey.cols * scale), cvRound (grey.rows * scale));
+  if (scaled_size.width < 1 || scaled_size.height < 1)
+    return;
+  cv::Mat resized = grey;
+  if (scale != 1.0)
+    cv::resize (grey, resized, scaled_size, 0, 0, scale < 1.0 ? cv::INTER_AREA : cv::INTER_LINEAR);
+  dlib::assign_image (out, dlib::cv_image<unsigned char> (resized));
+  for (int u = 0; u < upsample; ++u)
+    dlib::pyramid_up (out);
+}
+
+/** A detection's box in the input image's pixels. */
+cv::Rect
+inputBox (const dlib::rectangle &rect, double scale, int upsample)
+{
+  const double back = 1.0 / ((1 << upsample) * scale);
+  const cv::Rect box = toCv (rect);
+  return cv::Rect (static_cast<int> (std::lround (box.x * back)), static_cast<int> (std::lround (box.y * back)),
+                   static_cast<int> (std::lround (box.width * back)), static_cast<int> (std::lround (box.height * back)));
+}
+}  // namespace
 
 PeopleDetector::PeopleDetector () = default;
 PeopleDetector::~PeopleDetector () = default;
@@ -259,8 +300,33 @@ PeopleDetector::combine (std::vector<PeopleDetector> members, const std::vector<
       throw std::invalid_argument ("people detector ensemble: offsets (a member's own added) must lie in [-5, 5]");
   PeopleDetector detector;
   detector.impl_ = std::make_unique<Impl> ();
-  detector.impl_->members = std::move (flat);
-  detector.impl_->offsets = std::move (flat_offsets);
+  Impl &impl = *detector.impl_;
+  impl.members = std::move (flat);
+  impl.offsets = std::move (flat_offsets);
+  std::vector<bool> grouped (impl.members.size (), false);
+  for (std::size_t i = 0; i < impl.members.size (); ++i)
+  {
+    const Impl &a = *impl.members[i].impl_;
+    if (grouped[i] || a.opencv_default)
+      continue;
+    Impl::SharedPyramid group;
+    group.upsample = a.upsample;
+    group.scale = a.scale;
+    for (std::size_t j = i; j < impl.members.size (); ++j)
+    {
+      const Impl &b = *impl.members[j].impl_;
+      if (!grouped[j] && !b.opencv_default && b.upsample == a.upsample && b.scale == a.scale)
+      {
+        group.members.push_back (j);
+        group.fhog.push_back (b.fhog);
+      }
+    }
+    if (group.members.size () < 2)
+      continue;
+    for (const std::size_t j : group.members)
+      grouped[j] = true;
+    impl.shared.push_back (std::move (group));
+  }
   return detector;
 }
 
@@ -395,12 +461,41 @@ PeopleDetector::detect (const cv::Mat &image, double threshold) const
   if (!impl_->members.empty ())
   {
     std::vector<PersonDetection> all;
-    for (std::size_t i = 0; i < impl_->members.size (); ++i)
-      for (PersonDetection d : impl_->members[i].detect (image, threshold + impl_->offsets[i]))
+    std::vector<bool> done (impl_->members.size (), false);
+    if (!impl_->shared.empty ())
+    {
+      const cv::Mat grey = toGrey (image);
+      dlib::array2d<unsigned char> scanned;
+      std::vector<dlib::rect_detection> found;
+      for (const Impl::SharedPyramid &group : impl_->shared)
       {
-        d.score -= impl_->offsets[i];
-        all.push_back (d);
+        // One pass at the lowest member threshold; each member then keeps its own. The
+        // suppression is per detector, so what a member keeps is what it finds alone.
+        double lowest = std::numeric_limits<double>::infinity ();
+        for (const std::size_t i : group.members)
+        {
+          lowest = std::min (lowest, threshold + impl_->offsets[i]);
+          done[i] = true;
+        }
+        scanImage (grey, group.scale, group.upsample, scanned);
+        if (scanned.size () == 0)
+          continue;
+        dlib::evaluate_detectors (group.fhog, scanned, found, lowest);
+        for (const dlib::rect_detection &d : found)
+        {
+          const std::size_t i = group.members[d.weight_index];
+          if (d.detection_confidence >= threshold + impl_->offsets[i])
+            all.push_back ({inputBox (d.rect, group.scale, group.upsample), d.detection_confidence - impl_->offsets[i]});
+        }
       }
+    }
+    for (std::size_t i = 0; i < impl_->members.size (); ++i)
+      if (!done[i])
+        for (PersonDetection d : impl_->members[i].detect (image, threshold + impl_->offsets[i]))
+        {
+          d.score -= impl_->offsets[i];
+          all.push_back (d);
+        }
     sortByScore (all);
     // The members' own suppression, across members: best first, a box that overlaps a kept
     // one (IoU 0.5, or 95% of the smaller inside the other) is the same person.

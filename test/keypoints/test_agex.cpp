@@ -373,12 +373,20 @@ TEST (AgexSynthetic, StarLimbTipsCentreAndOrientations)
             << *std::max_element (angles.begin (), angles.end ()) << " deg\n";
 }
 
-TEST (AgexSynthetic, TwoBlobsGetTwoMeshesWithTheirOwnPoints)
+/** Two separate stars: a five-limbed one at 2 m on the left (mesh 0), a three-limbed one at
+  * 2.4 m on the right (mesh 1). */
+struct TwoStars
 {
-  const Camera cam;
   const Figure big = makeStar (Eigen::Vector2d (-0.30, 0.0), 2.0, 5, 0.18, 0.022, 0.06, -90.0);
   const Figure small = makeStar (Eigen::Vector2d (0.33, 0.02), 2.4, 3, 0.12, 0.022, 0.05, -60.0);
-  const Cloud::Ptr cloud = rasterise ({big, small}, cam);
+  const Cloud::Ptr cloud = rasterise ({big, small}, Camera ());
+};
+
+TEST (AgexSynthetic, TwoBlobsGetTwoMeshesWithTheirOwnPoints)
+{
+  const TwoStars stars;
+  const Figure &big = stars.big, &small = stars.small;
+  const Cloud::Ptr cloud = stars.cloud;
   const AgexRun run = runAgex (cloud, 6, 50, Agex::Mode::Incremental);
   ASSERT_EQ (run.meshes.size (), 2u);
   EXPECT_GT (run.meshes[0].indices.size (), run.meshes[1].indices.size ()) << "meshes are sorted largest first";
@@ -400,10 +408,9 @@ TEST (AgexSynthetic, TwoBlobsGetTwoMeshesWithTheirOwnPoints)
 
 TEST (AgexSynthetic, MinSeparationStopsEachMeshAtItsExtremities)
 {
-  const Camera cam;
-  const Figure big = makeStar (Eigen::Vector2d (-0.30, 0.0), 2.0, 5, 0.18, 0.022, 0.06, -90.0);
-  const Figure small = makeStar (Eigen::Vector2d (0.33, 0.02), 2.4, 3, 0.12, 0.022, 0.05, -60.0);
-  const Cloud::Ptr cloud = rasterise ({big, small}, cam);
+  const TwoStars stars;
+  const Figure &big = stars.big, &small = stars.small;
+  const Cloud::Ptr cloud = stars.cloud;
   const AgexRun all = runAgex (cloud, 16, 50, Agex::Mode::Incremental);
   ASSERT_EQ (all.points.size (), 32u);
   // Geodesically the tips lie 0.14-0.22 m from the centre (the surface and the pixel grid

@@ -385,13 +385,11 @@ struct TwoStars
 TEST (AgexSynthetic, TwoBlobsGetTwoMeshesWithTheirOwnPoints)
 {
   const TwoStars stars;
-  const Figure &big = stars.big, &small = stars.small;
-  const Cloud::Ptr cloud = stars.cloud;
-  const AgexRun run = runAgex (cloud, 6, 50, Agex::Mode::Incremental);
+  const AgexRun run = runAgex (stars.cloud, 6, 50, Agex::Mode::Incremental);
   ASSERT_EQ (run.meshes.size (), 2u);
   EXPECT_GT (run.meshes[0].indices.size (), run.meshes[1].indices.size ()) << "meshes are sorted largest first";
   ASSERT_EQ (run.points.size (), 12u);
-  expectWellFormed (*cloud, run, 6);
+  expectWellFormed (*stars.cloud, run, 6);
   for (const auto &p : run.points)
   {
     // Mesh 0 is the big star on the left, mesh 1 the small one on the right.
@@ -401,17 +399,15 @@ TEST (AgexSynthetic, TwoBlobsGetTwoMeshesWithTheirOwnPoints)
       EXPECT_GT (p.x, 0.05f) << "rank " << p.rank;
   }
   std::vector<double> angles;
-  expectFigureFound (run.points, 0, big, 0.03, kMaxOrientationErrorDeg, angles);
-  expectFigureFound (run.points, 1, small, 0.03, kMaxOrientationErrorDeg, angles);
+  expectFigureFound (run.points, 0, stars.big, 0.03, kMaxOrientationErrorDeg, angles);
+  expectFigureFound (run.points, 1, stars.small, 0.03, kMaxOrientationErrorDeg, angles);
   EXPECT_LT (mean (angles), kMeanOrientationErrorDeg);
 }
 
 TEST (AgexSynthetic, MinSeparationStopsEachMeshAtItsExtremities)
 {
   const TwoStars stars;
-  const Figure &big = stars.big, &small = stars.small;
-  const Cloud::Ptr cloud = stars.cloud;
-  const AgexRun all = runAgex (cloud, 16, 50, Agex::Mode::Incremental);
+  const AgexRun all = runAgex (stars.cloud, 16, 50, Agex::Mode::Incremental);
   ASSERT_EQ (all.points.size (), 32u);
   // Geodesically the tips lie 0.14-0.22 m from the centre (the surface and the pixel grid
   // lengthen the 0.18 and 0.12 m limbs); a limb's middle is at most 0.11 m from its tip and
@@ -419,7 +415,7 @@ TEST (AgexSynthetic, MinSeparationStopsEachMeshAtItsExtremities)
   constexpr float kSeparation = 0.13f;
   for (const auto mode : {Agex::Mode::Incremental, Agex::Mode::Naive})
   {
-    const AgexRun run = runAgex (cloud, 16, 50, mode, nullptr, 0.10f, kSeparation);
+    const AgexRun run = runAgex (stars.cloud, 16, 50, mode, nullptr, 0.10f, kSeparation);
     ASSERT_EQ (run.meshes.size (), 2u);
     // The centroid and one point per limb tip: 6 on the five-limbed star, 4 on the other.
     std::size_t per_mesh[2] = {0, 0};
@@ -447,8 +443,8 @@ TEST (AgexSynthetic, MinSeparationStopsEachMeshAtItsExtremities)
     }
     EXPECT_EQ (i, run.points.size ());
     std::vector<double> angles;
-    expectFigureFound (run.points, 0, big, 0.03, kMaxOrientationErrorDeg, angles);
-    expectFigureFound (run.points, 1, small, 0.03, kMaxOrientationErrorDeg, angles);
+    expectFigureFound (run.points, 0, stars.big, 0.03, kMaxOrientationErrorDeg, angles);
+    expectFigureFound (run.points, 1, stars.small, 0.03, kMaxOrientationErrorDeg, angles);
   }
 }
 

@@ -149,6 +149,87 @@ scanImage (const cv::Mat &grey, double scale, int upsample, dlib::array2d<unsign
     dlib::pyramid_up (out);
 }
 
+/** Reads one fhog detector as dlib::serialize wrote it (object_detector version 2: the scanner,
+  * the overlap test, the weight vectors), checking every size and setting before dlib acts on
+  * it: dlib allocates whatever a damaged file claims, divides by its cell size and reads the
+  * weights without checking their length. in must be seekable. */
+dlib::object_detector<Scanner>
+readFhogDetector (std::istream &in)
+{
+  int version = 0;
+  dlib::deserialize (version, in);
+  if (version != 2)
+    throw std::runtime_error ("fhog detector version " + std::to_string (version) + " (expected 2)");
+  const std::streampos scanner_at = in.tellg ();
+  // The scanner: its version, its feature pyramid (empty in a saved detector: an array's
+  // capacity and size), cell size, padding and window, as scan_fhog_pyramid serializes them.
+  int scanner_version = 0, cell_size = 0;
+  unsigned long capacity = 1, size = 1, padding = 0, window_width = 0, window_height = 0;
+  dlib::deserialize (scanner_version, in);
+  dlib::deserialize (capacity, in);
+  dlib::deserialize (size, in);
+  dlib::deserialize (cell_size, in);
+  dlib::deserialize (padding, in);
+  dlib::deserialize (window_width, in);
+  dlib::deserialize (window_height, in);
+  if (scanner_version != 1 || capacity != 0 || size != 0)
+    throw std::runtime_error ("an fhog scanner of another version or holding a feature pyramid");
+  if (cell_size < 1 || cell_size > 64 || padding > 64 || window_width < 16 || window_width > 1024 ||
+      window_height < 16 || window_height > 1024)
+    throw std::runtime_error ("fhog cell size " + std::to_string (cell_size) + ", padding " + std::to_string (padding) +
+                              " or window " + std::to_string (window_width) + "x" + std::to_string (window_height) +
+                              " out of range (1-64, 0-64, 16-1024)");
+  in.seekg (scanner_at);
+  Scanner scanner;
+  dlib::deserialize (scanner, in);
+  if (scanner.get_max_pyramid_levels () < 1 || scanner.get_max_pyramid_levels () > 1000 ||
+      scanner.get_min_pyramid_layer_width () < 1 || scanner.get_min_pyramid_layer_width () > 100000 ||
+      scanner.get_min_pyramid_layer_height () < 1 || scanner.get_min_pyramid_layer_height () > 100000 ||
+      !(scanner.get_nuclear_norm_regularization_strength () >= 0 &&
+        std::isfinite (scanner.get_nuclear_norm_regularization_strength ())))
+    throw std::runtime_error ("fhog pyramid settings out of range");
+  dlib::test_box_overlap overlap;
+  dlib::deserialize (overlap, in);
+  const auto unit = [] (double v) { return v >= 0.0 && v <= 1.0; };
+  if (!unit (overlap.get_iou_thresh ()) || !unit (overlap.get_percent_covered_thresh ()))
+    throw std::runtime_error ("overlap thresholds outside [0, 1]");
+  unsigned long filters = 0;
+  dlib::deserialize (filters, in);
+  if (filters != 1)
+    throw std::runtime_error (std::to_string (filters) + " filters (a trained people detector has 1)");
+  // A column vector: -rows, -columns, then the values; one weight per feature and the threshold.
+  const std::streampos weights_at = in.tellg ();
+  long rows = 0, columns = 0;
+  dlib::deserialize (rows, in);
+  dlib::deserialize (columns, in);
+  const long expected = scanner.get_num_dimensions () + 1;
+  if (std::labs (rows) != expected || std::labs (columns) != 1)
+    throw std::runtime_error ("a weight vector of " + std::to_string (std::labs (rows)) + "x" +
+                              std::to_string (std::labs (columns)) + " values (expected " + std::to_string (expected) +
+                              "x1)");
+  in.seekg (weights_at);
+  dlib::matrix<double, 0, 1> weights;
+  dlib::deserialize (weights, in);
+  for (long i = 0; i < weights.size (); ++i)
+    if (!std::isfinite (weights (i)))
+      throw std::runtime_error ("a weight that is not finite");
+  return dlib::object_detector<Scanner> (scanner, overlap, std::vector<dlib::matrix<double, 0, 1>>{weights});
+}
+
+/** Whether two detectors scan alike: dlib::evaluate_detectors pads every member's features for
+  * the largest window and takes the most extreme pyramid settings, so only members that agree
+  * on all of them find there exactly what they find alone. */
+bool
+sameScan (const Scanner &a, const Scanner &b)
+{
+  return a.get_cell_size () == b.get_cell_size () && a.get_padding () == b.get_padding () &&
+         a.get_detection_window_width () == b.get_detection_window_width () &&
+         a.get_detection_window_height () == b.get_detection_window_height () &&
+         a.get_max_pyramid_levels () == b.get_max_pyramid_levels () &&
+         a.get_min_pyramid_layer_width () == b.get_min_pyramid_layer_width () &&
+         a.get_min_pyramid_layer_height () == b.get_min_pyramid_layer_height ();
+}
+
 /** A detection's box in the input image's pixels. */
 cv::Rect
 inputBox (const dlib::rectangle &rect, double scale, int upsample)
@@ -315,7 +396,8 @@ PeopleDetector::combine (std::vector<PeopleDetector> members, const std::vector<
     for (std::size_t j = i; j < impl.members.size (); ++j)
     {
       const Impl &b = *impl.members[j].impl_;
-      if (!grouped[j] && !b.opencv_default && b.upsample == a.upsample && b.scale == a.scale)
+      if (!grouped[j] && !b.opencv_default && b.upsample == a.upsample && b.scale == a.scale &&
+          sameScan (a.fhog.get_scanner (), b.fhog.get_scanner ()))
       {
         group.members.push_back (j);
         group.fhog.push_back (b.fhog);
@@ -334,13 +416,18 @@ PeopleDetector
 PeopleDetector::load (const std::string &path)
 {
   std::error_code error;
+  if (!std::filesystem::is_regular_file (path, error))
+    throw std::runtime_error (path + (std::filesystem::exists (path, error) ? ": not a regular file"
+                                                                            : ": cannot open the people detector"));
   const std::uintmax_t bytes = std::filesystem::file_size (path, error);
-  if (!error && bytes > kMaxDetectorFileBytes)
+  if (error || bytes > kMaxDetectorFileBytes)
     throw std::runtime_error (path + ": " + std::to_string (bytes) + " bytes, more than a people detector's " +
                               std::to_string (kMaxDetectorFileBytes));
-  std::ifstream in (path, std::ios::binary);
-  if (!in)
-    throw std::runtime_error (path + ": cannot open the people detector");
+  std::ifstream file (path, std::ios::binary);
+  std::string content (static_cast<std::size_t> (bytes), '\0');
+  if (!file || !file.read (content.data (), static_cast<std::streamsize> (bytes)))
+    throw std::runtime_error (path + ": cannot read the people detector");
+  std::istringstream in (content);  // seekable: the decoder looks at sizes before dlib reads them
   const auto readTrained = [] (std::istream &in, Impl &impl) {
     int upsample = 0;
     double scale = 1.0;
@@ -349,41 +436,47 @@ PeopleDetector::load (const std::string &path)
     if (upsample < 0 || upsample > 4 || !(scale > 0.05 && scale <= 4.0))
       throw std::runtime_error ("upsample " + std::to_string (upsample) + " or scale " + std::to_string (scale) +
                                 " out of range (0-4, (0.05, 4])");
-    dlib::deserialize (impl.fhog, in);
+    impl.fhog = readFhogDetector (in);
     impl.upsample = upsample;
     impl.scale = scale;
   };
-  std::string magic;
-  std::getline (in, magic);
-  if (magic != kMagic && magic != kEnsembleMagic)
+  const std::size_t line_end = content.find ('\n');
+  const std::string magic = content.substr (0, std::min (line_end, std::size_t (64)));
+  if (line_end == std::string::npos || (magic != kMagic && magic != kEnsembleMagic))
     throw std::runtime_error (path + ": not an agex people detector (expected the header '" + std::string (kMagic) +
                               "' or '" + kEnsembleMagic + "')");
+  in.seekg (static_cast<std::streamoff> (line_end + 1));
   try
   {
+    PeopleDetector detector;
     if (magic == kMagic)
     {
-      PeopleDetector detector;
       detector.impl_ = std::make_unique<Impl> ();
       readTrained (in, *detector.impl_);
-      return detector;
     }
-    std::uint32_t count = 0;
-    dlib::deserialize (count, in);
-    if (count < 1 || count > kMaxEnsembleMembers)
-      throw std::runtime_error ("an ensemble of " + std::to_string (count) + " members (1 to " +
-                                std::to_string (kMaxEnsembleMembers) + ")");
-    std::vector<PeopleDetector> members (count);
-    std::vector<double> offsets (count, 0.0);
-    for (std::uint32_t i = 0; i < count; ++i)
+    else
     {
-      dlib::deserialize (offsets[i], in);
-      if (!(offsets[i] >= -5.0 && offsets[i] <= 5.0))
-        throw std::runtime_error ("member " + std::to_string (i) + "'s offset " + std::to_string (offsets[i]) +
-                                  " outside [-5, 5]");
-      members[i].impl_ = std::make_unique<Impl> ();
-      readTrained (in, *members[i].impl_);
+      std::uint32_t count = 0;
+      dlib::deserialize (count, in);
+      if (count < 1 || count > kMaxEnsembleMembers)
+        throw std::runtime_error ("an ensemble of " + std::to_string (count) + " members (1 to " +
+                                  std::to_string (kMaxEnsembleMembers) + ")");
+      std::vector<PeopleDetector> members (count);
+      std::vector<double> offsets (count, 0.0);
+      for (std::uint32_t i = 0; i < count; ++i)
+      {
+        dlib::deserialize (offsets[i], in);
+        if (!(offsets[i] >= -5.0 && offsets[i] <= 5.0))
+          throw std::runtime_error ("member " + std::to_string (i) + "'s offset " + std::to_string (offsets[i]) +
+                                    " outside [-5, 5]");
+        members[i].impl_ = std::make_unique<Impl> ();
+        readTrained (in, *members[i].impl_);
+      }
+      detector = combine (std::move (members), offsets);
     }
-    return combine (std::move (members), offsets);
+    if (in.peek () != std::char_traits<char>::eof ())
+      throw std::runtime_error ("bytes after the last detector");
+    return detector;
   }
   catch (const std::exception &e)
   {

@@ -561,32 +561,44 @@ TEST (PeopleDetector, OpenCvFallbackOnResizedImage)
 
 // Bright figures on noise: the fhog detector trained on a few finds a new one, and a saved
 // detector gives the same boxes.
-TEST (PeopleDetector, TrainsOnSyntheticFiguresAndRoundTrips)
+/** Figures on noise, one per 240x240 image, drawn by rng: the image and the figure's box. */
+cv::Mat
+noisyFigure (std::mt19937 &rng, cv::Rect *box)
 {
-  std::mt19937 rng (3);
   std::uniform_real_distribution<float> arm (-0.5f, 1.2f), legs (0.15f, 0.45f), where (70.f, 170.f);
-  auto make = [&] (cv::Rect *box) {
-    const Figure f = drawFigure (cv::Size (240, 240), cv::Point2f (where (rng), 115), 0.9f, arm (rng), legs (rng));
-    *box = agex::annotateContour (f.mask, agex::ContourAnchors ()).box;
-    cv::Mat noise (f.mask.size (), CV_8UC1);
-    cv::randu (noise, 0, 60);
-    return cv::Mat (noise + f.mask * 0.7);
-  };
+  const Figure f = drawFigure (cv::Size (240, 240), cv::Point2f (where (rng), 115), 0.9f, arm (rng), legs (rng));
+  *box = agex::annotateContour (f.mask, agex::ContourAnchors ()).box;
+  cv::Mat noise (f.mask.size (), CV_8UC1);
+  cv::randu (noise, 0, 60);
+  return cv::Mat (noise + f.mask * 0.7);
+}
+
+/** A 64x64-window detector trained on 8 noisy figures drawn by rng. */
+agex::PeopleDetector
+trainOnNoisyFigures (std::mt19937 &rng, double c)
+{
   std::vector<cv::Mat> images;
   std::vector<std::vector<cv::Rect>> boxes;
   for (int i = 0; i < 8; ++i)
   {
     cv::Rect box;
-    images.push_back (make (&box));
+    images.push_back (noisyFigure (rng, &box));
     boxes.push_back ({box});
   }
   agex::PeopleDetectorTrainingParams params;
   params.window_width = params.window_height = 64;
   params.num_threads = 2;
-  const agex::PeopleDetector detector = agex::PeopleDetector::train (images, boxes, params);
+  params.c = c;
+  return agex::PeopleDetector::train (images, boxes, params);
+}
+
+TEST (PeopleDetector, TrainsOnSyntheticFiguresAndRoundTrips)
+{
+  std::mt19937 rng (3);
+  const agex::PeopleDetector detector = trainOnNoisyFigures (rng, 20.0);
   EXPECT_FALSE (detector.isOpenCvDefault ());
   cv::Rect truth;
-  const cv::Mat test = make (&truth);
+  const cv::Mat test = noisyFigure (rng, &truth);
   const auto found = detector.detect (test);
   ASSERT_FALSE (found.empty ());
   double best = 0;
@@ -602,7 +614,55 @@ TEST (PeopleDetector, TrainsOnSyntheticFiguresAndRoundTrips)
   for (std::size_t i = 0; i < found.size (); ++i)
     EXPECT_EQ (again[i].box, found[i].box);
   EXPECT_THROW (agex::PeopleDetector::openCvDefault ().save (path), std::logic_error);
-  EXPECT_THROW (agex::PeopleDetector::train ({}, {}, params), std::invalid_argument);
+  EXPECT_THROW (agex::PeopleDetector::train ({}, {}, agex::PeopleDetectorTrainingParams ()), std::invalid_argument);
+  fs::remove_all (dir);
+}
+
+// Two different detectors that scan alike share one HOG pyramid in an ensemble; what the
+// ensemble keeps is what each finds alone at its own threshold, merged by one suppression.
+TEST (PeopleDetector, SharedPyramidFindsWhatEachMemberFindsAlone)
+{
+  std::mt19937 rng (7);
+  const fs::path dir = tempDir ("shared_pyramid");
+  const std::string a_path = (dir / "a.svm").string (), b_path = (dir / "b.svm").string ();
+  trainOnNoisyFigures (rng, 20.0).save (a_path);
+  trainOnNoisyFigures (rng, 2.0).save (b_path);
+  cv::Mat image (240, 480, CV_8UC1);
+  cv::Rect left, right;
+  noisyFigure (rng, &left).copyTo (image (cv::Rect (0, 0, 240, 240)));
+  noisyFigure (rng, &right).copyTo (image (cv::Rect (240, 0, 240, 240)));
+  std::vector<agex::PeopleDetector> members;
+  members.push_back (agex::PeopleDetector::load (a_path));
+  members.push_back (agex::PeopleDetector::load (b_path));
+  // Member a finds the two figures above -0.6 and many windows near -1; b runs 0.6 lower.
+  const double threshold = -0.6, offset_b = -0.6;
+  const auto shared = agex::PeopleDetector::combine (std::move (members), {0.0, offset_b}).detect (image, threshold);
+
+  std::vector<agex::PersonDetection> alone = agex::PeopleDetector::load (a_path).detect (image, threshold);
+  for (agex::PersonDetection d : agex::PeopleDetector::load (b_path).detect (image, threshold + offset_b))
+  {
+    d.score -= offset_b;
+    alone.push_back (d);
+  }
+  std::stable_sort (alone.begin (), alone.end (),
+                    [] (const agex::PersonDetection &x, const agex::PersonDetection &y) { return x.score > y.score; });
+  std::vector<agex::PersonDetection> expected;
+  for (const agex::PersonDetection &d : alone)
+  {
+    const bool same = std::any_of (expected.begin (), expected.end (), [&] (const agex::PersonDetection &k) {
+      const double covered = static_cast<double> ((k.box & d.box).area ()) / std::min (k.box.area (), d.box.area ());
+      return agex::boxIoU (k.box, d.box) > 0.5 || covered > 0.95;
+    });
+    if (!same)
+      expected.push_back (d);
+  }
+  ASSERT_GE (expected.size (), 2u) << "both figures should be found";
+  ASSERT_EQ (shared.size (), expected.size ());
+  for (std::size_t i = 0; i < shared.size (); ++i)
+  {
+    EXPECT_EQ (shared[i].box, expected[i].box) << i;
+    EXPECT_DOUBLE_EQ (shared[i].score, expected[i].score) << i;
+  }
   fs::remove_all (dir);
 }
 
@@ -825,6 +885,37 @@ TEST (PeopleDetector, EnsembleFileKeepsItsMembersAndOffsets)
   expectRefused ("nine.svm", nine, "9 members");
   expectRefused ("cut.svm", bytes.substr (0, bytes.size () / 2), "damaged");
   expectRefused ("header.svm", "agex_people_detector_fhog_ensemble 1\n", "damaged");
+  expectRefused ("longer.svm", bytes + "x", "bytes after the last detector");
+  try
+  {
+    agex::PeopleDetector::load (dir.string ());
+    ADD_FAILURE () << "a directory loaded";
+  }
+  catch (const std::runtime_error &e)
+  {
+    EXPECT_NE (std::string (e.what ()).find ("not a regular file"), std::string::npos) << e.what ();
+  }
+  // Damage anywhere (sizes, settings, weights) is refused or loads as some detector, never a
+  // crash, a read past a buffer (the sanitizer build checks) or an allocation of what a size
+  // claims: the decoder checks dlib's sizes before dlib allocates them.
+  std::mt19937 rng (35);
+  const std::string damaged_path = (dir / "damaged.svm").string ();
+  for (int trial = 0; trial < 300; ++trial)
+  {
+    std::string damaged = bytes;
+    const std::size_t at = count_at + rng () % std::min<std::size_t> (bytes.size () - count_at, 400);
+    damaged[at] = static_cast<char> (rng ());
+    writeAll (damaged_path, damaged);
+    try
+    {
+      const agex::PeopleDetector detector = agex::PeopleDetector::load (damaged_path);
+      detector.detect (cv::Mat (64, 64, CV_8UC1, cv::Scalar (90)));
+    }
+    catch (const std::runtime_error &e)
+    {
+      EXPECT_NE (std::string (e.what ()).find (damaged_path), std::string::npos) << e.what ();
+    }
+  }
 
   std::vector<agex::PeopleDetector> many;
   for (int i = 0; i < 9; ++i)

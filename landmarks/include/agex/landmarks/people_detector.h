@@ -92,7 +92,8 @@ public:
     * mismatch or an offset outside [-5, 5] (a member's own added) */
   static PeopleDetector combine (std::vector<PeopleDetector> members, const std::vector<double> &offsets);
   /** A trained detector or an ensemble of them (save ()); at most 8 members, offsets in
-    * [-5, 5], files up to 64 MB.
+    * [-5, 5], regular files up to 64 MB. Every size and setting dlib would act on (the
+    * scanner's, the weights' count) is checked before dlib reads it.
     * \throws std::runtime_error naming the file when it is missing, not a detector or damaged */
   static PeopleDetector load (const std::string &path);
   /** Writes the trained detector, or the ensemble of trained detectors with their offsets,

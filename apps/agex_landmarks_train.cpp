@@ -52,7 +52,7 @@ main (int argc, char **argv)
         throw std::runtime_error ("--combine writes the detectors as one to --detector-out: give it");
       agex::InputFiles read;
       for (const std::string &item : combined)
-        read.add (item.substr (0, item.rfind ('@')));
+        read.add (agex::apps::detectorFileAndOffset (item, "--combine").first);
       agex::apps::checkOutputPath (detector_path, "--detector-out", [] (const std::string &path) {
         try
         {
@@ -64,10 +64,7 @@ main (int argc, char **argv)
           return std::string ("exists and is not a people detector");
         }
       }, read);
-      std::vector<agex::PeopleDetector> members;
-      std::vector<double> offsets;
-      agex::apps::combineDetectorFiles (combined, "--combine", members, offsets);
-      const agex::PeopleDetector detector = agex::PeopleDetector::combine (std::move (members), offsets);
+      const agex::PeopleDetector detector = agex::apps::combineDetectorFiles ({}, {}, combined, "--combine");
       detector.save (detector_path);
       std::cout << detector_path << ": " << detector.description () << "\n";
       return 0;

@@ -54,8 +54,11 @@ done
 mkdir -p "$WORK"
 
 if [ "$RECIPE" = ensemble ]; then
-  RECIPE=ccp+inria bash "$0" "$WORK/ccp_inria.svm" "$BUILD" "$WORK"
-  RECIPE=inria bash "$0" "$WORK/inria.svm" "$BUILD" "$WORK"
+  # The offsets were measured for C 20 and loss 2: other values give other scores.
+  [ "$C" = 20 ] && [ "$LOSS" = 2 ] ||
+    { echo "train_people_detector: RECIPE=ensemble uses C 20 and loss 2 (its thresholds were measured for them); unset AGEX_DETECTOR_C and AGEX_DETECTOR_LOSS_MISSED" >&2; exit 1; }
+  RECIPE=ccp+inria bash "$ROOT/scripts/train_people_detector.sh" "$WORK/ccp_inria.svm" "$BUILD" "$WORK"
+  RECIPE=inria bash "$ROOT/scripts/train_people_detector.sh" "$WORK/inria.svm" "$BUILD" "$WORK"
   "$BIN/agex_landmarks_train" --combine "$WORK/ccp_inria.svm@-0.59" --combine "$WORK/inria.svm@-0.70" --detector-out "$OUT"
   exit 0
 fi
@@ -77,7 +80,7 @@ if [ "$RECIPE" = ccp ]; then
 else
   CCP_PEOPLE=()
   [ "$RECIPE" = inria ] && CCP_PEOPLE=(--detector-paste-people 0 --detector-originals 0)
-  "$BIN/agex_landmarks_train" "${STUB[@]}" "${CCP_PEOPLE[@]}" --detector-out "$OUT" --detector-c "$C" \
+  "$BIN/agex_landmarks_train" "${STUB[@]}" ${CCP_PEOPLE[@]+"${CCP_PEOPLE[@]}"} --detector-out "$OUT" --detector-c "$C" \
     --detector-loss-missed "$LOSS" --detector-epsilon "$(python3 -c "import sys; print(0.01 * float(sys.argv[1]))" "$LOSS")" \
     --detector-crops "$INRIA" --detector-crops-box 24,32,48,96 --detector-crops-held-out 0 \
     --detector-crops-min-height 72 --detector-crops-max-height 200 --detector-backgrounds 1 \

@@ -288,6 +288,7 @@ check "agex_eval compare with a detect flag" 1 "--forest applies to agex_eval de
 cp "$SRC/test/fuzz/regressions/model/nested_100000_deep_overflows_opencv_stack.yml" in/nested_model.yml
 cp "$SRC/test/fuzz/regressions/imglab_xml/nested_50000_deep_overflowed_the_stack.xml" in/nested_imglab.xml
 cp "$SRC/data/models/agex_people_detector.svm" in/people.svm
+cp "$SRC/data/models/agex_people_detector.svm" "in/people@0.5.svm"
 mkdir -p fifo && mkfifo fifo/frame.u16
 (cd in && find . -type f -print0 | sort -z | xargs -0 sha256sum) > inputs.sha256
 check "model nested 100,000 deep ([[[...)" 1 "nested_model.yml:3: nested more than 1000 levels deep" $D in/frame.png --model in/nested_model.yml --json out/a.json
@@ -304,6 +305,11 @@ if [ -x "$BIN/agex_landmarks_train" ]; then
     $BIN/agex_landmarks_train --combine in/model.yml@0 --combine in/model.yml --detector-out in/model.yml
   check "agex_landmarks_train --combine of a file that is no detector" 1 "model.yml: not an agex people detector" \
     $BIN/agex_landmarks_train --combine in/model.yml --detector-out out/both.svm
+  check "agex_landmarks_train --combine, 10 members in all (5 ensembles of 2)" 1 "error: --combine: .*10 members in all, at most 8" \
+    $BIN/agex_landmarks_train --combine in/people.svm --combine in/people.svm --combine in/people.svm \
+    --combine in/people.svm --combine in/people.svm --detector-out out/both.svm
+  check "agex_landmarks_train --combine of a file named with an '@'" 0 "out/at.svm: ensemble of 2" \
+    $BIN/agex_landmarks_train --combine "in/people@0.5.svm" --detector-out out/at.svm
 fi
 check "a .u16 frame that is a FIFO" 1 "frame.u16: is a FIFO \\(named pipe\\), not a regular file" timeout 20 $D fifo/frame.u16 --json out/a.json
 

@@ -190,31 +190,46 @@ loadPeopleDetector (const PeopleDetectorChoice &choice)
   if (choice.also.empty ())
     return first;
   std::vector<PeopleDetector> members;
-  std::vector<double> offsets{0.0};
   members.push_back (std::move (first));
-  combineDetectorFiles (choice.also, "--detector-also", members, offsets);
-  return PeopleDetector::combine (std::move (members), offsets);
+  return combineDetectorFiles (std::move (members), {0.0}, choice.also, "--detector-also");
 }
 
-void
-combineDetectorFiles (const std::vector<std::string> &items, const std::string &flag,
-                      std::vector<PeopleDetector> &members, std::vector<double> &offsets)
+std::pair<std::string, double>
+detectorFileAndOffset (const std::string &item, const std::string &flag)
+{
+  // A file whose name holds an '@' is that file, at offset 0.
+  std::error_code error;
+  const std::size_t at = item.rfind ('@');
+  if (at == std::string::npos || std::filesystem::is_regular_file (item, error))
+    return {item, 0.0};
+  double offset = 0.0;
+  std::istringstream in (item.substr (at + 1));
+  if (!(in >> offset) || !(in >> std::ws).eof () || !(offset >= -5.0 && offset <= 5.0))
+    throw std::runtime_error (flag + " " + item + ": the offset after '@' must be a number in [-5, 5]");
+  return {item.substr (0, at), offset};
+}
+
+PeopleDetector
+combineDetectorFiles (std::vector<PeopleDetector> members, std::vector<double> offsets,
+                      const std::vector<std::string> &items, const std::string &flag)
 {
   if (members.size () + items.size () > 8)
     throw std::runtime_error (flag + ": at most 8 detectors run as one, not " +
                               std::to_string (members.size () + items.size ()));
   for (const std::string &item : items)
   {
-    const std::size_t at = item.rfind ('@');
-    double offset = 0.0;
-    if (at != std::string::npos)
-    {
-      std::istringstream in (item.substr (at + 1));
-      if (!(in >> offset) || !(in >> std::ws).eof () || !(offset >= -5.0 && offset <= 5.0))
-        throw std::runtime_error (flag + " " + item + ": the offset after '@' must be a number in [-5, 5]");
-    }
-    members.push_back (PeopleDetector::load (item.substr (0, at)));
+    const auto [file, offset] = detectorFileAndOffset (item, flag);
+    members.push_back (PeopleDetector::load (file));
     offsets.push_back (offset);
+  }
+  try
+  {
+    return PeopleDetector::combine (std::move (members), offsets);
+  }
+  catch (const std::invalid_argument &e)
+  {
+    // Members that are ensembles count with all their members and offsets.
+    throw std::runtime_error (flag + ": " + e.what ());
   }
 }
 

@@ -18,6 +18,7 @@
 #include <functional>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace agex
@@ -70,12 +71,15 @@ constexpr const char *kOpenCvHogName = "opencv-hog";
 boost::program_options::options_description detectorChoiceOptions (PeopleDetectorChoice &choice);
 /** \throws std::runtime_error for contradicting flags or a file that is no detector */
 PeopleDetector loadPeopleDetector (const PeopleDetectorChoice &choice);
-/** \brief Appends the detectors of items (each FILE or FILE@OFFSET, the offset in [-5, 5],
-  * default 0) and their offsets to members and offsets, for PeopleDetector::combine.
-  * \throws std::runtime_error naming flag and the item for a bad offset, a file that is no
-  * detector, or more than 8 members in all */
-void combineDetectorFiles (const std::vector<std::string> &items, const std::string &flag,
-                           std::vector<PeopleDetector> &members, std::vector<double> &offsets);
+/** \brief The file and offset an item of --detector-also or --combine names: FILE@OFFSET (the
+  * offset in [-5, 5]), or FILE at 0 (also when the whole item, '@' and all, is a file).
+  * \throws std::runtime_error naming flag and the item for a bad offset */
+std::pair<std::string, double> detectorFileAndOffset (const std::string &item, const std::string &flag);
+/** \brief members and offsets, then the detectors items name (detectorFileAndOffset), as one
+  * (PeopleDetector::combine). \throws std::runtime_error naming flag (and the item) for a bad
+  * offset, a file that is no detector, or more than 8 members in all */
+PeopleDetector combineDetectorFiles (std::vector<PeopleDetector> members, std::vector<double> offsets,
+                                     const std::vector<std::string> &items, const std::string &flag);
 
 /** The images a landmark app reads, and every file it reads (no output may land on one). */
 struct LandmarkInputs

@@ -173,6 +173,29 @@ meshPointNear (const PipelineResult &result, const Eigen::Vector3f &p, float rad
 // ---------------------------------------------------------------------------
 // (a) One scene, two resolutions of one camera, the same meshes.
 
+// min_separation reaches AGEX: on the figure (one mesh, three limbs) k = 16 points stop at the
+// limbs' tips, the first points of the run without it.
+TEST (MetricPipeline, MinSeparationStopsAgexAtTheFiguresExtremities)
+{
+  PipelineParams params = figureSettings ();
+  params.k = 16;
+  const Cloud::Ptr cloud = rasterise (bodyBeforeAWall (), kinectCamera (640, 480));
+  const PipelineResult all = agex::runDepthPipeline (cloud, params);
+  params.min_separation = 0.2f;  // shorter than every limb, longer than the bumps along them
+  const PipelineResult some = agex::runDepthPipeline (cloud, params);
+  ASSERT_EQ (all.meshes.size (), 1u);
+  ASSERT_EQ (all.interest_points.size (), 16u);
+  ASSERT_GE (some.interest_points.size (), 4u);  // the centre and the three tips
+  ASSERT_LT (some.interest_points.size (), all.interest_points.size ());
+  for (std::size_t i = 0; i < some.interest_points.size (); ++i)
+  {
+    EXPECT_EQ (some.interest_points[i].getVector3fMap (), all.interest_points[i].getVector3fMap ()) << i;
+    if (i > 0)
+      EXPECT_GE (some.interest_points[i].geodesic_distance, 0.2f) << i;
+  }
+  EXPECT_LT (all.interest_points[some.interest_points.size ()].geodesic_distance, 0.2f);
+}
+
 TEST (MetricPipeline, AFigureGivesTheSameMeshesAt640x480And320x240AndOnA512x424Camera)
 {
   const auto figures = bodyBeforeAWall ();

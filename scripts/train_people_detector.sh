@@ -7,8 +7,9 @@
 #     false detections per image on the validation photos where it is highest (CCP photos; on
 #     pasted people and street crops it is lower); -0.70 was the best of -0.84, -0.70 and -0.60
 #     by the mean recall at 0.1 false detections per image over the three kinds of validation
-#     photos (doc/landmarks.md, "Full-size trainings"). 20 minutes on the 2 cores of the shared
-#     machine with other jobs beside (13 + 7).
+#     photos (doc/landmarks.md, "Full-size trainings"). 20-30 minutes on the 2 cores of the shared
+#     machine with other jobs beside. The two-thread training sums in varying order: the INRIA
+#     member came out byte for byte, the other's weights within 0.01, every figure within 0.02.
 #   RECIPE=ccp+inria: the CCP photos but every fifth (0005, 0010, ..., 0900: the held-out fold),
 #     as they are and their people pasted 2 per photo into each other's photos, plus INRIA's
 #     person crops but those of every fifth source photo (the held-out fold) pasted 2 per photo

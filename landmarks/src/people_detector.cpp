@@ -115,6 +115,14 @@ struct PeopleDetector::Impl
   int upsample = 0;
   double scale = 1.0;
   dlib::object_detector<Scanner> fhog;
+  /** fhog again, scanned with dlib::evaluate_detectors: the detector's own operator () loads
+    * the image into its scanner, so one detector could not serve two threads at once. */
+  std::vector<dlib::object_detector<Scanner>> scanned_alone;
+  void setFhog (dlib::object_detector<Scanner> detector)
+  {
+    fhog = std::move (detector);
+    scanned_alone.assign (1, fhog);
+  }
   cv::HOGDescriptor hog;
   std::vector<PeopleDetector> members;  ///< an ensemble (combine ()) when not empty
   std::vector<double> offsets;
@@ -329,7 +337,7 @@ PeopleDetector::train (const std::vector<cv::Mat> &grey_images, const std::vecto
   std::vector<std::vector<dlib::rectangle>> ignore = removed;
   for (std::size_t i = 0; i < ignore.size (); ++i)
     ignore[i].insert (ignore[i].end (), regions[i].begin (), regions[i].end ());
-  detector.impl_->fhog = trainer.train (images, targets, ignore);
+  detector.impl_->setFhog (trainer.train (images, targets, ignore));
   return detector;
 }
 
@@ -436,7 +444,7 @@ PeopleDetector::load (const std::string &path)
     if (upsample < 0 || upsample > 4 || !(scale > 0.05 && scale <= 4.0))
       throw std::runtime_error ("upsample " + std::to_string (upsample) + " or scale " + std::to_string (scale) +
                                 " out of range (0-4, (0.05, 4])");
-    impl.fhog = readFhogDetector (in);
+    impl.setFhog (readFhogDetector (in));
     impl.upsample = upsample;
     impl.scale = scale;
   };
@@ -655,14 +663,14 @@ PeopleDetector::detect (const cv::Mat &image, double threshold) const
   }
   std::vector<dlib::rect_detection> detections;
   if (impl_->upsample == 0)
-    impl_->fhog (dlib::cv_image<unsigned char> (resized), detections, threshold);
+    dlib::evaluate_detectors (impl_->scanned_alone, dlib::cv_image<unsigned char> (resized), detections, threshold);
   else
   {
     dlib::array2d<unsigned char> scaled;
     dlib::assign_image (scaled, dlib::cv_image<unsigned char> (resized));
     for (int u = 0; u < impl_->upsample; ++u)
       dlib::pyramid_up (scaled);
-    impl_->fhog (scaled, detections, threshold);
+    dlib::evaluate_detectors (impl_->scanned_alone, scaled, detections, threshold);
   }
   const double scale = 1.0 / ((1 << impl_->upsample) * impl_->scale);
   for (const dlib::rect_detection &d : detections)

@@ -24,6 +24,7 @@
 #include <cmath>
 #include <limits>
 #include <random>
+#include <thread>
 
 namespace
 {
@@ -616,6 +617,42 @@ TEST (PeopleDetector, TrainsOnSyntheticFiguresAndRoundTrips)
   EXPECT_THROW (agex::PeopleDetector::openCvDefault ().save (path), std::logic_error);
   EXPECT_THROW (agex::PeopleDetector::train ({}, {}, agex::PeopleDetectorTrainingParams ()), std::invalid_argument);
   fs::remove_all (dir);
+}
+
+// One detector, several threads: each finds what one thread alone finds (dlib's own detector
+// call loads the image into its scanner; agex scans with evaluate_detectors, which does not).
+TEST (PeopleDetector, OneDetectorServesSeveralThreads)
+{
+  std::mt19937 rng (11);
+  const agex::PeopleDetector detector = trainOnNoisyFigures (rng, 20.0);
+  std::vector<cv::Mat> images;
+  for (int i = 0; i < 4; ++i)
+  {
+    cv::Rect box;
+    images.push_back (noisyFigure (rng, &box));
+  }
+  std::vector<std::vector<agex::PersonDetection>> expected;
+  for (const cv::Mat &image : images)
+    expected.push_back (detector.detect (image, -0.8));
+  std::vector<std::vector<std::vector<agex::PersonDetection>>> found (images.size ());
+  std::vector<std::thread> threads;
+  for (std::size_t t = 0; t < images.size (); ++t)
+    threads.emplace_back ([&, t] {
+      for (int round = 0; round < 20; ++round)
+        found[t].push_back (detector.detect (images[t], -0.8));
+    });
+  for (auto &thread : threads)
+    thread.join ();
+  for (std::size_t t = 0; t < images.size (); ++t)
+    for (const auto &run : found[t])
+    {
+      ASSERT_EQ (run.size (), expected[t].size ()) << "image " << t;
+      for (std::size_t i = 0; i < run.size (); ++i)
+      {
+        EXPECT_EQ (run[i].box, expected[t][i].box);
+        EXPECT_EQ (run[i].score, expected[t][i].score);
+      }
+    }
 }
 
 // Two different detectors that scan alike share one HOG pyramid in an ensemble; what the

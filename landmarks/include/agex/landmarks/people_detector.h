@@ -104,7 +104,7 @@ public:
   std::string description () const;
 
   /** People in an image (grey or BGR), highest score first; threshold shifts the SVM's
-    * decision value. The search covers every scale from the window's height up to the image's
+    * decision value. Safe to call from several threads at once on one detector. The search covers every scale from the window's height up to the image's
     * (a pyramid of steps of 5/6), so people of 96 to 960 pixels in a 1280x960 image. */
   std::vector<PersonDetection> detect (const cv::Mat &image, double threshold = 0.0) const;
 

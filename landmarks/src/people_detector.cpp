@@ -611,16 +611,15 @@ PeopleDetector::detect (const cv::Mat &image, double threshold) const
     return people;
   }
   const cv::Mat grey = toGrey (image);
-  cv::Mat resized = grey;
-  // An image that shrinks to nothing holds no person the detector could see.
-  const cv::Size scaled_size (cvRound (grey.cols * impl_->scale), cvRound (grey.rows * impl_->scale));
-  if (scaled_size.width < 1 || scaled_size.height < 1)
-    return people;
-  if (impl_->scale != 1.0)
-    cv::resize (grey, resized, scaled_size, 0, 0,
-                impl_->scale < 1.0 ? cv::INTER_AREA : cv::INTER_LINEAR);
   if (impl_->opencv_default)
   {
+    cv::Mat resized = grey;
+    // An image that shrinks to nothing holds no person the detector could see.
+    const cv::Size scaled_size (cvRound (grey.cols * impl_->scale), cvRound (grey.rows * impl_->scale));
+    if (scaled_size.width < 1 || scaled_size.height < 1)
+      return people;
+    if (impl_->scale != 1.0)
+      cv::resize (grey, resized, scaled_size, 0, 0, impl_->scale < 1.0 ? cv::INTER_AREA : cv::INTER_LINEAR);
     // HOGDescriptor::detectMultiScale's pyramid (steps of 1.05, then groups of at least 3
     // windows), run level by level here: OpenCV 4.6 scans the levels in parallel and appends
     // boxes and scores under separate locks, so a score could end up paired with another
@@ -661,25 +660,14 @@ PeopleDetector::detect (const cv::Mat &image, double threshold) const
     sortByScore (people);
     return people;
   }
+  dlib::array2d<unsigned char> scanned;
+  scanImage (grey, impl_->scale, impl_->upsample, scanned);
+  if (scanned.size () == 0)
+    return people;
   std::vector<dlib::rect_detection> detections;
-  if (impl_->upsample == 0)
-    dlib::evaluate_detectors (impl_->scanned_alone, dlib::cv_image<unsigned char> (resized), detections, threshold);
-  else
-  {
-    dlib::array2d<unsigned char> scaled;
-    dlib::assign_image (scaled, dlib::cv_image<unsigned char> (resized));
-    for (int u = 0; u < impl_->upsample; ++u)
-      dlib::pyramid_up (scaled);
-    dlib::evaluate_detectors (impl_->scanned_alone, scaled, detections, threshold);
-  }
-  const double scale = 1.0 / ((1 << impl_->upsample) * impl_->scale);
+  dlib::evaluate_detectors (impl_->scanned_alone, scanned, detections, threshold);
   for (const dlib::rect_detection &d : detections)
-  {
-    cv::Rect box = toCv (d.rect);
-    box = cv::Rect (static_cast<int> (std::lround (box.x * scale)), static_cast<int> (std::lround (box.y * scale)),
-                    static_cast<int> (std::lround (box.width * scale)), static_cast<int> (std::lround (box.height * scale)));
-    people.push_back ({box, d.detection_confidence});
-  }
+    people.push_back ({inputBox (d.rect, impl_->scale, impl_->upsample), d.detection_confidence});
   sortByScore (people);
   return people;
 }

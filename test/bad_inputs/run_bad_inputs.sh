@@ -303,6 +303,8 @@ if [ -x "$BIN/agex_landmarks_train" ]; then
     $BIN/agex_landmarks_train --combine in/people.svm --dataset in/nested_imglab.xml --out out/shape.dat --detector-out out/both.svm
   check "agex_landmarks_train --combine writing over a member" 1 "would overwrite an input" \
     $BIN/agex_landmarks_train --combine in/model.yml@0 --combine in/model.yml --detector-out in/model.yml
+  check "agex_landmarks_train --combine over a file that is no detector" 1 "frame.png: exists and is not a people detector" \
+    $BIN/agex_landmarks_train --combine in/people.svm --detector-out in/frame.png
   check "agex_landmarks_train --combine of a file that is no detector" 1 "model.yml: not an agex people detector" \
     $BIN/agex_landmarks_train --combine in/model.yml --detector-out out/both.svm
   check "agex_landmarks_train --combine, 10 members in all (5 ensembles of 2)" 1 "error: --combine: .*10 members in all, at most 8" \

@@ -29,6 +29,8 @@
 # positive (agex_train --background-ratio); AGEX_TRAIN_DETECTORS (default "fused agex sw")
 # picks the detectors trained; AGEX_TRAIN_WORKING_SPACING (metres, default 0: every pixel)
 # trains the detectors at that working density (agex_train --working-spacing, doc/pipeline.md).
+# AGEX_TRAIN_CLOTHES=1 dresses the synthetic people (agex_synth --clothes: sleeves, trousers,
+# shoes and hair of drawn thickness; default 0, the bare meshes the bundled models saw).
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 MODELS=${1:?usage: train_mixed_models.sh OUT_DIR [BUILD_DIR] [WORK_DIR]}
@@ -48,6 +50,8 @@ RATIO="${AGEX_TRAIN_BACKGROUND_RATIO:-4}"
 [[ "$RATIO" =~ ^[0-9]+(\.[0-9]+)?$ ]] &&
   python3 -c "import sys; sys.exit(0 if float(sys.argv[1]) <= 1000 else 1)" "$RATIO" 2> /dev/null ||
   { echo "train_mixed_models: AGEX_TRAIN_BACKGROUND_RATIO must be a number 0-1000, not '$RATIO'" >&2; exit 1; }
+CLOTHES="${AGEX_TRAIN_CLOTHES:-0}"
+[[ "$CLOTHES" =~ ^[01]$ ]] || { echo "train_mixed_models: AGEX_TRAIN_CLOTHES must be 0 or 1, not '$CLOTHES'" >&2; exit 1; }
 SPACING="${AGEX_TRAIN_WORKING_SPACING:-0}"
 [[ "$SPACING" =~ ^0(\.[0-9]+)?$ ]] &&
   python3 -c "import sys; sys.exit(0 if float(sys.argv[1]) <= 0.05 else 1)" "$SPACING" 2> /dev/null ||
@@ -99,6 +103,7 @@ wait "$first" && wait "$second"
 bash "$ROOT/scripts/pose_split.sh" "$WORK/poses" > /dev/null
 M="$SHARED/mocap"
 SHAPES=(--body-mesh "$SHARED/makehuman" --body-shapes --subjects 24)
+[ "$CLOTHES" = 1 ] && SHAPES+=(--clothes)
 BANK=(--pose-dir "$WORK/poses/train/cmu_cc" --pose-dir "$WORK/poses/train/cmu_poses" --procedural-poses 2000 --thin-poses 0.05)
 FIVE=(--motion "$M/cmu_02_01.bvh" "$M/cmu_05_06.bvh" "$M/cmu_131_01.bvh" "$M/cmu_131_02.bvh" "$M/cmu_131_03.bvh")
 synth () { local name=$1; shift; once "$name" "$BIN/agex_synth" "${SHAPES[@]}" "$@" --output "$WORK/$name"; }

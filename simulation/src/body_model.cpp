@@ -54,12 +54,27 @@ BodyParams::random (SynthRng &rng)
   return p;
 }
 
+void
+BodyParams::dress (SynthRng &rng)
+{
+  clothes_top = rng.uniform (0.003, 0.025);
+  clothes_bottom = rng.uniform (0.003, 0.025);
+  shoes = rng.uniform (0.008, 0.025);
+  hands = rng.uniform (0.002, 0.01);
+  hair = rng.uniform (0.0, 0.03);
+}
+
 std::string
 BodyParams::describe () const
 {
-  return "height_scale=" + fixed (height_scale) + " girth=" + fixed (girth) + " head_scale=" + fixed (head_scale) +
-         " arm_girth=" + fixed (arm_girth) + " leg_girth=" + fixed (leg_girth) + " torso_depth=" + fixed (torso_depth) +
-         " reflectivity=" + fixed (reflectivity, 2);
+  std::string text = "height_scale=" + fixed (height_scale) + " girth=" + fixed (girth) +
+                     " head_scale=" + fixed (head_scale) + " arm_girth=" + fixed (arm_girth) +
+                     " leg_girth=" + fixed (leg_girth) + " torso_depth=" + fixed (torso_depth) +
+                     " reflectivity=" + fixed (reflectivity, 2);
+  if (dressed ())
+    text += " clothes_top=" + fixed (clothes_top) + " clothes_bottom=" + fixed (clothes_bottom) +
+            " shoes=" + fixed (shoes) + " hands=" + fixed (hands) + " hair=" + fixed (hair);
+  return text;
 }
 
 BodyModel

@@ -4,6 +4,7 @@
 
 #include <Eigen/Geometry>
 
+#include <algorithm>
 #include <limits>
 #include <unordered_map>
 
@@ -228,8 +229,82 @@ meshParams (const MotionClip &clip, const BodyParams &params, const HumanMesh &m
     return params;
   BodyParams shaped;
   shaped.reflectivity = params.reflectivity;
+  shaped.clothes_top = params.clothes_top;
+  shaped.clothes_bottom = params.clothes_bottom;
+  shaped.shoes = params.shoes;
+  shaped.hands = params.hands;
+  shaped.hair = params.hair;
   shaped.height_scale = mesh.height () / restStandingHeight (clip);
   return shaped;
+}
+
+/** Clothes: each vertex moved out along its normal by its part's thickness
+  * (BodyParams::clothes_top ...). The normals are the posed triangles' area-weighted sums,
+  * turned outward if the mesh winds the other way; one offset per vertex, so parts that
+  * share a seam stay joined. */
+void
+dressVertices (std::vector<Eigen::Vector3d> &posed, const HumanMesh &mesh, const BodyParams &params)
+{
+  if (!params.dressed ())
+    return;
+  std::vector<Eigen::Vector3d> normals (posed.size (), Eigen::Vector3d::Zero ());
+  for (const auto &t : mesh.triangles ())
+  {
+    const auto a = static_cast<std::size_t> (t[0]), b = static_cast<std::size_t> (t[1]),
+               c = static_cast<std::size_t> (t[2]);
+    const Eigen::Vector3d n = (posed[b] - posed[a]).cross (posed[c] - posed[a]);
+    for (int k = 0; k < 3; ++k)
+      normals[static_cast<std::size_t> (t[k])] += n;
+  }
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero ();
+  for (const auto &p : posed)
+    centre += p;
+  centre /= static_cast<double> (std::max<std::size_t> (posed.size (), 1));
+  double outward = 0.0;
+  for (std::size_t v = 0; v < posed.size (); ++v)
+    outward += normals[v].dot (posed[v] - centre);
+  const double sign = outward < 0.0 ? -1.0 : 1.0;
+  // Hair: full on the top of the head (the rest pose's head top), none below its middle.
+  double head_low = std::numeric_limits<double>::infinity ();
+  const int top = mesh.tipVertices ()[HumanMesh::Head];
+  const double head_top = top >= 0 ? mesh.vertices ()[static_cast<std::size_t> (top)].y () : 0.0;
+  for (std::size_t v = 0; v < posed.size (); ++v)
+    if (mesh.parts ()[v] == HumanMesh::Head)
+      head_low = std::min (head_low, mesh.vertices ()[v].y ());
+  const double head_middle = 0.5 * (head_low + head_top);
+  for (std::size_t v = 0; v < posed.size (); ++v)
+  {
+    double offset = 0.0;
+    switch (mesh.parts ()[v])
+    {
+    case HumanMesh::Trunk:
+    case HumanMesh::LeftArm:
+    case HumanMesh::RightArm:
+      offset = params.clothes_top;
+      break;
+    case HumanMesh::LeftLeg:
+    case HumanMesh::RightLeg:
+      offset = params.clothes_bottom;
+      break;
+    case HumanMesh::LeftFoot:
+    case HumanMesh::RightFoot:
+      offset = params.shoes;
+      break;
+    case HumanMesh::LeftHand:
+    case HumanMesh::RightHand:
+      offset = params.hands;
+      break;
+    case HumanMesh::Head:
+      if (top >= 0 && head_top > head_middle)
+        offset = params.hair * std::clamp ((mesh.vertices ()[v].y () - head_middle) / (head_top - head_middle), 0.0, 1.0);
+      break;
+    default:
+      break;
+    }
+    const double length = normals[v].norm ();
+    if (offset > 0.0 && length > 0.0)
+      posed[v] += (sign * offset / length) * normals[v];
+  }
 }
 
 SynthMaterial
@@ -262,6 +337,7 @@ buildMeshBody (const MotionClip &clip, int frame, const BodyParams &given, const
   std::vector<Eigen::Vector3d> posed (n);
   for (std::size_t v = 0; v < n; ++v)
     posed[v] = pose.vertex (v);
+  dressVertices (posed, mesh, params);
 
   BodyModel body;
   // One mesh per part, so a label's visibility test can ask which part a ray hit, the
@@ -313,7 +389,7 @@ buildMeshBody (const MotionClip &clip, int frame, const BodyParams &given, const
     body.tip[i] = posed[static_cast<std::size_t> (mesh.tipVertices ()[parts[i]])];
     body.base[i] = pose.posedHead (bases[i]);
     body.tip_primitives[i] = {static_cast<int> (parts[i])};
-    body.tip_tolerance[i] = radius[i] + 0.03;
+    body.tip_tolerance[i] = radius[i] + 0.03 + std::max ({params.shoes, params.hands});
   }
   body.centre = 0.5 * (pose.posedHead ("root") + pose.posedHead ("neck01"));
   body.lowest = std::numeric_limits<double>::infinity ();
@@ -339,6 +415,17 @@ meshBodyLowest (const MotionClip &clip, int frame, const BodyParams &given, cons
   const BodyParams params = meshParams (clip, given, mesh);
   const MeshPose pose (clip, frame, params, mesh);
   double lowest = std::numeric_limits<double>::infinity ();
+  if (params.dressed ())
+  {
+    // Shoes lower the soles: pose and dress every vertex, as buildMeshBody does.
+    std::vector<Eigen::Vector3d> posed (mesh.vertices ().size ());
+    for (std::size_t v = 0; v < posed.size (); ++v)
+      posed[v] = pose.vertex (v);
+    dressVertices (posed, mesh, params);
+    for (const auto &p : posed)
+      lowest = std::min (lowest, p.y ());
+    return lowest;
+  }
   for (std::size_t v = 0; v < mesh.vertices ().size (); ++v)
   {
     const HumanMesh::Part part = mesh.parts ()[v];

@@ -174,6 +174,15 @@ SynthGenerator::SynthGenerator (const SynthOptions &options_in)
     subjects_.push_back (BodyParams::random (rng));
   if (options.body_shapes && options.body_mesh.empty ())
     throw std::invalid_argument ("body shapes need a MakeHuman body mesh (body_mesh)");
+  if (options.clothes && options.body_mesh.empty ())
+    throw std::invalid_argument ("clothes need a MakeHuman body mesh (body_mesh)");
+  if (options.clothes)
+  {
+    // Their own generator too: every other draw stays as without clothes.
+    SynthRng clothes_rng = SynthRng::forItem (options.seed, ~2ull);
+    for (auto &subject : subjects_)
+      subject.dress (clothes_rng);
+  }
   if (!options.body_mesh.empty ())
     mesh_ = std::make_shared<const HumanMesh> (HumanMesh::load (options.body_mesh));
   if (options.body_shapes)

@@ -606,3 +606,84 @@ TEST (SynthGeneratorShapes, EachSubjectHasItsOwnShapedMesh)
   EXPECT_EQ (plain.mesh (1), plain.mesh ());
 }
 }  // namespace
+
+namespace
+{
+/** Distances between the same vertices of two posings of one part (same triangles, same order). */
+std::vector<double>
+vertexMoves (const agex::SynthPrimitive &bare, const agex::SynthPrimitive &dressed)
+{
+  std::vector<double> moves;
+  const auto &a = bare.mesh->vertices (), &b = dressed.mesh->vertices ();
+  if (a.size () != b.size ())
+    return moves;
+  for (std::size_t v = 0; v < a.size (); ++v)
+    moves.push_back ((b[v] - a[v]).norm ());
+  return moves;
+}
+}  // namespace
+
+TEST (SynthGeneratorClothes, DressedPartsMoveOutByTheirThicknessAndNothingElseChanges)
+{
+  AGEX_REQUIRE_MAKEHUMAN_TARGETS ();
+  AGEX_REQUIRE_SHARED_FILE (sharedData ("mocap/cmu_131_03.bvh"), "the CMU motion capture (../shared/data/mocap)");
+  agex::SynthOptions options;
+  options.motion_files = {sharedData ("mocap/cmu_131_03.bvh")};
+  options.subjects = 2;
+  options.body_shapes = true;
+  options.clothes = true;
+  EXPECT_THROW (agex::SynthGenerator{options}, std::invalid_argument) << "clothes need a mesh";
+  options.body_mesh = sharedData ("makehuman");
+  const agex::SynthGenerator dressed (options);
+  options.clothes = false;
+  const agex::SynthGenerator bare (options);
+  ASSERT_EQ (dressed.subjects ().size (), 2u);
+  for (int s = 0; s < 2; ++s)
+  {
+    const agex::BodyParams &p = dressed.subjects ()[static_cast<std::size_t> (s)];
+    const agex::BodyParams &q = bare.subjects ()[static_cast<std::size_t> (s)];
+    EXPECT_FALSE (q.dressed ());
+    ASSERT_TRUE (p.dressed ());
+    EXPECT_TRUE (p.clothes_top >= 0.003 && p.clothes_top <= 0.025) << p.clothes_top;
+    EXPECT_TRUE (p.shoes >= 0.008 && p.shoes <= 0.025) << p.shoes;
+    EXPECT_TRUE (p.hair >= 0.0 && p.hair <= 0.03) << p.hair;
+    // Clothes come from their own generator: the rest of the subject is drawn as without.
+    EXPECT_EQ (p.describe ().rfind (q.describe (), 0), 0u) << p.describe () << " / " << q.describe ();
+    EXPECT_NE (p.describe ().find (" shoes="), std::string::npos);
+
+    const agex::BodyModel a = bare.body (0, 10, s), b = dressed.body (0, 10, s);
+    ASSERT_EQ (a.primitives.size (), b.primitives.size ());
+    const std::pair<agex::HumanMesh::Part, double> parts[] = {
+        {agex::HumanMesh::LeftArm, p.clothes_top}, {agex::HumanMesh::RightLeg, p.clothes_bottom},
+        {agex::HumanMesh::LeftFoot, p.shoes},      {agex::HumanMesh::RightHand, p.hands}};
+    for (const auto &[part, thickness] : parts)
+    {
+      const std::vector<double> moves = vertexMoves (a.primitives[part], b.primitives[part]);
+      ASSERT_FALSE (moves.empty ()) << "part " << part;
+      // Every vertex a part owns moves by its thickness; seam vertices owned by a neighbour
+      // move by the neighbour's.
+      std::vector<double> sorted = moves;
+      std::sort (sorted.begin (), sorted.end ());
+      EXPECT_NEAR (sorted[sorted.size () / 2], thickness, 1e-6) << "part " << part;
+    }
+    // Hair: the top of the head rises by its thickness, the chin stays.
+    EXPECT_NEAR ((b.tip[0] - a.tip[0]).norm (), p.hair, 1e-6);
+    // Shoes lower the soles: the floor a frame stands the body on is below them.
+    EXPECT_LT (b.lowest, a.lowest - 0.5 * p.shoes);
+    // The foot tip is a dressed vertex and stays visible within its wider tolerance.
+    EXPECT_NEAR (b.tip_tolerance[3] - a.tip_tolerance[3], std::max (p.shoes, p.hands), 1e-9);
+  }
+  // Rendered frames of dressed people show more of them than bare ones.
+  int bare_pixels = 0, dressed_pixels = 0;
+  for (std::uint64_t i = 0; i < 3; ++i)
+  {
+    const agex::SynthFrame x = bare.render (i), y = dressed.render (i);
+    for (std::size_t k = 0; k < x.part_label.size (); ++k)
+    {
+      bare_pixels += x.part_label[k] != 0;
+      dressed_pixels += y.part_label[k] != 0;
+    }
+  }
+  EXPECT_GT (bare_pixels, 300);
+  EXPECT_GT (dressed_pixels, bare_pixels * 11 / 10) << bare_pixels << " bare, " << dressed_pixels << " dressed";
+}

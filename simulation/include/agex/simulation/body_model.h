@@ -24,6 +24,20 @@ struct BodyParams
   double leg_girth = 1.0;     ///< extra factor on leg radii
   double torso_depth = 1.0;   ///< front-back size of the torso
   double reflectivity = 0.7;  ///< clothes and skin, 0..1
+  /** Clothes on mesh bodies (buildMeshBody), metres each part's surface moves out along its
+    * normal: real people's sleeves, trousers and shoes make arms, legs and feet wider than
+    * the bare MakeHuman mesh (doc/results.md, "Synthetic hands and feet are thinner than
+    * real ones"). 0: bare (the default). */
+  double clothes_top = 0.0;     ///< trunk and arms
+  double clothes_bottom = 0.0;  ///< legs
+  double shoes = 0.0;           ///< feet (a shoe's sole and upper)
+  double hands = 0.0;           ///< hands: what a Kinect sees of curled fingers is a blob
+  double hair = 0.0;            ///< on the top of the head, fading out to its middle
+
+  /** Draws a subject's clothes: top 0.3-2.5 cm, bottom 0.3-2.5 cm, shoes 0.8-2.5 cm,
+    * hands 0.2-1 cm, hair 0-3 cm. */
+  void dress (SynthRng &rng);
+  bool dressed () const { return clothes_top > 0 || clothes_bottom > 0 || shoes > 0 || hands > 0 || hair > 0; }
 
   /** Draws a subject: height 0.92-1.08, girth 0.85-1.25, head 0.93-1.07, arms and legs
     * 0.9-1.12, torso depth 0.9-1.2, reflectivity 0.45-0.9. */

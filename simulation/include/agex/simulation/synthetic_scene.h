@@ -129,6 +129,10 @@ struct SynthOptions
     * the seed) and the mesh shaped by MakeHuman's macro targets of body_mesh, so its
     * stature and girth come from the shape (doc/synthetic.md, "Body shapes"). */
   bool body_shapes = false;
+  /** With body_mesh: each subject wears clothes and shoes of its own thickness
+    * (BodyParams::dress, drawn from the seed), so arms, legs and feet are as wide as a
+    * dressed person's; false: the bare mesh. */
+  bool clothes = false;
   /** Also paint colour frames (shadeColour; sr4000 and kinect only); the depth is the same
     * as without. */
   bool colour = false;

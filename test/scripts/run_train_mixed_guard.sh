@@ -2,7 +2,7 @@
 # scripts/train_mixed_models.sh, evaluate_moved.sh and real_frame_overlays.sh write only what is theirs.
 # train_mixed_models.sh never writes over models already in its output folder (unless
 # AGEX_TRAIN_FORCE=1) and refuses a bad AGEX_TRAIN_SCALE, AGEX_TRAIN_HOLDOUT,
-# AGEX_TRAIN_BACKGROUND_RATIO, AGEX_TRAIN_DETECTORS or AGEX_TRAIN_WORKING_SPACING before any work, as train_bundled_models.sh
+# AGEX_TRAIN_BACKGROUND_RATIO, AGEX_TRAIN_DETECTORS, AGEX_TRAIN_WORKING_SPACING or AGEX_TRAIN_CLOTHES before any work, as train_bundled_models.sh
 # an unknown AGEX_BUNDLED_RECIPE;
 # evaluate_bonn.sh refuses an unknown AGEX_EVAL_RECIPE before making its folder, and a fold
 # folder of the other recipe. Skips (77) without
@@ -33,6 +33,10 @@ grep -q "AGEX_TRAIN_HOLDOUT" "$work/err4" || fail "the hold-out refusal does not
 AGEX_TRAIN_BACKGROUND_RATIO=-1 bash "$src/scripts/train_mixed_models.sh" "$work/new" "$work/no_build" "$work/w6" \
   2> "$work/err7" && fail "AGEX_TRAIN_BACKGROUND_RATIO=-1 was accepted"
 grep -q "AGEX_TRAIN_BACKGROUND_RATIO" "$work/err7" || fail "the ratio refusal does not name it: $(cat "$work/err7")"
+AGEX_TRAIN_CLOTHES=yes bash "$src/scripts/train_mixed_models.sh" "$work/new" "$work/no_build" "$work/w12" \
+  2> "$work/err14" && fail "AGEX_TRAIN_CLOTHES=yes was accepted"
+grep -q "AGEX_TRAIN_CLOTHES" "$work/err14" || fail "the clothes refusal does not name it: $(cat "$work/err14")"
+[ -e "$work/w12" ] && fail "it started work before refusing AGEX_TRAIN_CLOTHES"
 AGEX_TRAIN_DETECTORS="fused forest" bash "$src/scripts/train_mixed_models.sh" "$work/new" "$work/no_build" "$work/w7" \
   2> "$work/err8" && fail "AGEX_TRAIN_DETECTORS with an unknown detector was accepted"
 grep -q "AGEX_TRAIN_DETECTORS" "$work/err8" || fail "the detector refusal does not name it: $(cat "$work/err8")"

@@ -11,7 +11,8 @@ the model with spur_iterations 0 in a temporary directory). Needs the agex Pytho
 (PYTHONPATH=build/python) and NumPy. Widths are measured on the meshes without the erosion,
 across the part at 30% and 60% of the way from the base (wrist, ankle) to the tip (heads: half
 way from the neck to the top). A tip's 3D point is the nearest valid depth within 5 pixels of
-its labelled pixel, as a hand-clicked label gives it (both kinds of data alike)."""
+its labelled pixel, as a hand-clicked label gives it (both kinds of data alike). A part in
+front of the body measures the body: read medians, not single cuts."""
 import argparse, csv, json, os, shutil, subprocess, sys, tempfile
 
 import numpy as np
@@ -20,18 +21,25 @@ import agex
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 
+def labels_file(directory):
+    path = os.path.join(directory, 'labels.csv')
+    if not os.path.isfile(path):
+        sys.exit(f'part_widths: {path}: missing (not a labelled dataset)')
+    return open(path, newline='')
+
+
 def frames(args):
     """(path, [(part, tip_u, tip_v, base_u, base_v)]) per frame with labels."""
     items = {}
     if args.bonn:
         seqs = set(args.sequences.split(',')) if args.sequences else None
-        for r in csv.DictReader(open(os.path.join(args.bonn, 'labels.csv'))):
+        for r in csv.DictReader(labels_file(args.bonn)):
             if (seqs and r['sequence'] not in seqs) or r['keyframe'] != '1':
                 continue
             path = os.path.join(args.bonn, 'depth', r['sequence'], r['frame'] + '.png')
             items.setdefault(path, []).append(r)
     else:
-        for r in csv.DictReader(open(os.path.join(args.dataset, 'labels.csv'))):
+        for r in csv.DictReader(labels_file(args.dataset)):
             if r.get('visible', '1') != '1':
                 continue
             items.setdefault(os.path.join(args.dataset, 'frames', r['frame'] + '.pcd'), []).append(r)
@@ -43,7 +51,10 @@ def frames(args):
 def intrinsics(args, path):
     """A dataset's intrinsics (its PCD frames carry none)."""
     if args.dataset:
-        k = json.load(open(os.path.join(args.dataset, 'dataset.json'))).get('intrinsics')
+        try:
+            k = json.load(open(os.path.join(args.dataset, 'dataset.json'))).get('intrinsics')
+        except (OSError, ValueError, AttributeError) as e:
+            sys.exit(f'part_widths: {os.path.join(args.dataset, "dataset.json")}: cannot read its intrinsics ({e})')
         if isinstance(k, dict) and all(isinstance(k.get(c), (int, float)) and k[c] > 0 for c in ('fx', 'fy', 'cx', 'cy')):
             return k
     sys.exit(f'part_widths: {path}: no intrinsics (and none in dataset.json)')
@@ -90,16 +101,24 @@ def main():
     args = a.parse_args()
     if not 1 <= args.frames <= 100000:
         sys.exit('part_widths: --frames must be 1-100000')
+    if args.sequences is not None and not all(q in '12345678' and len(q) == 1 for q in args.sequences.split(',')):
+        sys.exit(f'part_widths: --sequences lists Bonn sequences 1-8 (e.g. 7,8), not {args.sequences!r}')
+    if not os.path.isfile(args.model):
+        sys.exit(f'part_widths: {args.model}: no such model file')
     with tempfile.TemporaryDirectory() as tmp:
         off_model = os.path.join(tmp, 'no_spur.yml')
-        subprocess.run([sys.executable, os.path.join(ROOT, 'scripts/set_model_pipeline.py'), args.model, off_model,
-                        'spur_iterations=0'], check=True, stdout=subprocess.DEVNULL)
+        made = subprocess.run([sys.executable, os.path.join(ROOT, 'scripts/set_model_pipeline.py'), args.model,
+                               off_model, 'spur_iterations=0'], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+        if made.returncode != 0:
+            sys.exit(f'part_widths: {args.model}: cannot turn its spur erosion off: {made.stderr.strip()}')
         for f in os.listdir(os.path.dirname(os.path.abspath(args.model))):
             if f.endswith('.agexforest'):
                 shutil.copy(os.path.join(os.path.dirname(os.path.abspath(args.model)), f), tmp)
         on, off = agex.BodyPartDetector(model=args.model), agex.BodyPartDetector(model=off_model)
         widths, near = {}, {}
+        seen = 0
         for path, labels in frames(args):
+            seen += 1
             frame = agex.load_frame(path)
             if not frame.has_intrinsics:
                 k = intrinsics(args, path)
@@ -119,6 +138,8 @@ def main():
                     w = width(meshes[1], frame.points[..., 2], frame.fx, np.array([bu, bv]) + f * d, d / length)
                     if w is not None:
                         widths.setdefault(part, []).append(w)
+        if seen == 0:
+            sys.exit('part_widths: no labelled frames (keyframes of the sequences, or visible labels) to measure')
         for part in sorted(set(widths) | set(near)):
             w = np.array(widths.get(part, [np.nan])) * 100
             d = np.array(near.get(part, [[np.inf, np.inf]]))

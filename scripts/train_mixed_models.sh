@@ -44,14 +44,17 @@ python3 -c "import sys; s = float(sys.argv[1]); sys.exit(0 if 0.05 <= s <= 1 els
 HOLDOUT="${AGEX_TRAIN_HOLDOUT:-}"
 [[ -z "$HOLDOUT" || "$HOLDOUT" =~ ^[1-8](,[1-8])*$ ]] ||
   { echo "train_mixed_models: AGEX_TRAIN_HOLDOUT must list Bonn sequences 1-8 (e.g. 7,8), not '$HOLDOUT'" >&2; exit 1; }
-# Forests trained without the held-out sequences get their own names in WORK_DIR.
-TAG=${HOLDOUT:+_without_${HOLDOUT//,/}}
+CLOTHES="${AGEX_TRAIN_CLOTHES:-0}"
+[[ "$CLOTHES" =~ ^[01]$ ]] || { echo "train_mixed_models: AGEX_TRAIN_CLOTHES must be 0 or 1, not '$CLOTHES'" >&2; exit 1; }
+# Dressed synthetic sets, and forests trained on them, have their own names in WORK_DIR, as
+# forests trained without the held-out sequences do: a rerun never takes one for the other.
+DRESS=""
+[ "$CLOTHES" = 1 ] && DRESS=_clothes
+TAG=${HOLDOUT:+_without_${HOLDOUT//,/}}$DRESS
 RATIO="${AGEX_TRAIN_BACKGROUND_RATIO:-4}"
 [[ "$RATIO" =~ ^[0-9]+(\.[0-9]+)?$ ]] &&
   python3 -c "import sys; sys.exit(0 if float(sys.argv[1]) <= 1000 else 1)" "$RATIO" 2> /dev/null ||
   { echo "train_mixed_models: AGEX_TRAIN_BACKGROUND_RATIO must be a number 0-1000, not '$RATIO'" >&2; exit 1; }
-CLOTHES="${AGEX_TRAIN_CLOTHES:-0}"
-[[ "$CLOTHES" =~ ^[01]$ ]] || { echo "train_mixed_models: AGEX_TRAIN_CLOTHES must be 0 or 1, not '$CLOTHES'" >&2; exit 1; }
 SPACING="${AGEX_TRAIN_WORKING_SPACING:-0}"
 [[ "$SPACING" =~ ^0(\.[0-9]+)?$ ]] &&
   python3 -c "import sys; sys.exit(0 if float(sys.argv[1]) <= 0.05 else 1)" "$SPACING" 2> /dev/null ||
@@ -106,7 +109,7 @@ SHAPES=(--body-mesh "$SHARED/makehuman" --body-shapes --subjects 24)
 [ "$CLOTHES" = 1 ] && SHAPES+=(--clothes)
 BANK=(--pose-dir "$WORK/poses/train/cmu_cc" --pose-dir "$WORK/poses/train/cmu_poses" --procedural-poses 2000 --thin-poses 0.05)
 FIVE=(--motion "$M/cmu_02_01.bvh" "$M/cmu_05_06.bvh" "$M/cmu_131_01.bvh" "$M/cmu_131_02.bvh" "$M/cmu_131_03.bvh")
-synth () { local name=$1; shift; once "$name" "$BIN/agex_synth" "${SHAPES[@]}" "$@" --output "$WORK/$name"; }
+synth () { local name=$1$DRESS; shift; once "$name" "$BIN/agex_synth" "${SHAPES[@]}" "$@" --output "$WORK/$name"; }
 ( synth bank_k640 "${BANK[@]}" --layout whole --people 3 --sensor kinect --frames $(frames 400) --seed 101
   synth bank_k2 "${BANK[@]}" --layout whole --people 3 --sensor kinect2 --frames $(frames 200) --seed 103
   synth five_k640 "${FIVE[@]}" --layout whole --people 3 --sensor kinect --kinect-window 9 --frames $(frames 200) --seed 105 ) &
@@ -125,7 +128,8 @@ GROUP_SEQS=()
 for pair in 1,2 3,4 5,6 7,8; do  # each pair less the held-out sequences (may be empty)
   GROUP_SEQS+=("$(echo "$pair" | tr ',' '\n' | grep -vxF -f <(echo "${HOLDOUT:-0}" | tr ',' '\n') | paste -sd, || true)")
 done
-GROUP_SYNTH=("bank_k640 five_bonn" "bank_k320 five_k640" "bank_k2 five_k320" "bank_bonn")
+GROUP_SYNTH=("bank_k640$DRESS five_bonn$DRESS" "bank_k320$DRESS five_k640$DRESS" "bank_k2$DRESS five_k320$DRESS"
+  "bank_bonn$DRESS")
 group_args () {  # group_args G [FOREST]: the --dataset (and --dataset-forest) flags of group G
   local g=$1 forest=${2:-} d
   [ -n "${GROUP_SEQS[$g]}" ] && for d in "${REAL[@]}"; do

@@ -238,14 +238,63 @@ meshParams (const MotionClip &clip, const BodyParams &params, const HumanMesh &m
   return shaped;
 }
 
-/** Clothes: each vertex moved out along its normal by its part's thickness
-  * (BodyParams::clothes_top ...). The normals are the posed triangles' area-weighted sums,
-  * turned outward if the mesh winds the other way; one offset per vertex, so parts that
-  * share a seam stay joined. */
+/** Clothes: how far each vertex moves out (BodyParams::clothes_top ...), by its part;
+  * hair is full on the top of the head (the rest pose's head top) and none below its
+  * middle. Empty for a bare body. */
+std::vector<double>
+clothesOffsets (const HumanMesh &mesh, const BodyParams &params)
+{
+  if (!params.dressed ())
+    return {};
+  const std::size_t n = mesh.vertices ().size ();
+  double head_low = std::numeric_limits<double>::infinity ();
+  const int top = mesh.tipVertices ()[HumanMesh::Head];
+  const double head_top = top >= 0 ? mesh.vertices ()[static_cast<std::size_t> (top)].y () : 0.0;
+  for (std::size_t v = 0; v < n; ++v)
+    if (mesh.parts ()[v] == HumanMesh::Head)
+      head_low = std::min (head_low, mesh.vertices ()[v].y ());
+  const double head_middle = 0.5 * (head_low + head_top);
+  std::vector<double> offsets (n, 0.0);
+  for (std::size_t v = 0; v < n; ++v)
+  {
+    switch (mesh.parts ()[v])
+    {
+    case HumanMesh::Trunk:
+    case HumanMesh::LeftArm:
+    case HumanMesh::RightArm:
+      offsets[v] = params.clothes_top;
+      break;
+    case HumanMesh::LeftLeg:
+    case HumanMesh::RightLeg:
+      offsets[v] = params.clothes_bottom;
+      break;
+    case HumanMesh::LeftFoot:
+    case HumanMesh::RightFoot:
+      offsets[v] = params.shoes;
+      break;
+    case HumanMesh::LeftHand:
+    case HumanMesh::RightHand:
+      offsets[v] = params.hands;
+      break;
+    case HumanMesh::Head:
+      if (top >= 0 && head_top > head_middle)
+        offsets[v] = params.hair * std::clamp ((mesh.vertices ()[v].y () - head_middle) / (head_top - head_middle), 0.0, 1.0);
+      break;
+    default:
+      break;
+    }
+  }
+  return offsets;
+}
+
+/** Dresses a posed body: each vertex moved out along its normal (the posed triangles'
+  * area-weighted sum, turned outward if the mesh winds the other way) by its offset; one
+  * offset per vertex, so parts that share a seam stay joined. */
 void
 dressVertices (std::vector<Eigen::Vector3d> &posed, const HumanMesh &mesh, const BodyParams &params)
 {
-  if (!params.dressed ())
+  const std::vector<double> offsets = clothesOffsets (mesh, params);
+  if (offsets.empty ())
     return;
   std::vector<Eigen::Vector3d> normals (posed.size (), Eigen::Vector3d::Zero ());
   for (const auto &t : mesh.triangles ())
@@ -264,46 +313,11 @@ dressVertices (std::vector<Eigen::Vector3d> &posed, const HumanMesh &mesh, const
   for (std::size_t v = 0; v < posed.size (); ++v)
     outward += normals[v].dot (posed[v] - centre);
   const double sign = outward < 0.0 ? -1.0 : 1.0;
-  // Hair: full on the top of the head (the rest pose's head top), none below its middle.
-  double head_low = std::numeric_limits<double>::infinity ();
-  const int top = mesh.tipVertices ()[HumanMesh::Head];
-  const double head_top = top >= 0 ? mesh.vertices ()[static_cast<std::size_t> (top)].y () : 0.0;
-  for (std::size_t v = 0; v < posed.size (); ++v)
-    if (mesh.parts ()[v] == HumanMesh::Head)
-      head_low = std::min (head_low, mesh.vertices ()[v].y ());
-  const double head_middle = 0.5 * (head_low + head_top);
   for (std::size_t v = 0; v < posed.size (); ++v)
   {
-    double offset = 0.0;
-    switch (mesh.parts ()[v])
-    {
-    case HumanMesh::Trunk:
-    case HumanMesh::LeftArm:
-    case HumanMesh::RightArm:
-      offset = params.clothes_top;
-      break;
-    case HumanMesh::LeftLeg:
-    case HumanMesh::RightLeg:
-      offset = params.clothes_bottom;
-      break;
-    case HumanMesh::LeftFoot:
-    case HumanMesh::RightFoot:
-      offset = params.shoes;
-      break;
-    case HumanMesh::LeftHand:
-    case HumanMesh::RightHand:
-      offset = params.hands;
-      break;
-    case HumanMesh::Head:
-      if (top >= 0 && head_top > head_middle)
-        offset = params.hair * std::clamp ((mesh.vertices ()[v].y () - head_middle) / (head_top - head_middle), 0.0, 1.0);
-      break;
-    default:
-      break;
-    }
     const double length = normals[v].norm ();
-    if (offset > 0.0 && length > 0.0)
-      posed[v] += (sign * offset / length) * normals[v];
+    if (offsets[v] > 0.0 && length > 0.0)
+      posed[v] += (sign * offsets[v] / length) * normals[v];
   }
 }
 
@@ -382,6 +396,8 @@ buildMeshBody (const MotionClip &clip, int frame, const BodyParams &given, const
                                     HumanMesh::RightFoot};
   const char *bases[5] = {"head", "wrist.L", "wrist.R", "foot.L", "foot.R"};
   const double extremity = 0.5 + 0.5 * params.girth;
+  // A dressed tip stands its part's thickness farther out.
+  const double clothes[5] = {params.hair, params.hands, params.hands, params.shoes, params.shoes};
   const double radius[5] = {0.095 * s * params.head_scale, 0.03 * s * extremity, 0.03 * s * extremity,
                             0.04 * s * extremity, 0.04 * s * extremity};
   for (int i = 0; i < 5; ++i)
@@ -389,7 +405,7 @@ buildMeshBody (const MotionClip &clip, int frame, const BodyParams &given, const
     body.tip[i] = posed[static_cast<std::size_t> (mesh.tipVertices ()[parts[i]])];
     body.base[i] = pose.posedHead (bases[i]);
     body.tip_primitives[i] = {static_cast<int> (parts[i])};
-    body.tip_tolerance[i] = radius[i] + 0.03 + std::max ({params.shoes, params.hands});
+    body.tip_tolerance[i] = radius[i] + 0.03 + clothes[i];
   }
   body.centre = 0.5 * (pose.posedHead ("root") + pose.posedHead ("neck01"));
   body.lowest = std::numeric_limits<double>::infinity ();
@@ -415,22 +431,14 @@ meshBodyLowest (const MotionClip &clip, int frame, const BodyParams &given, cons
   const BodyParams params = meshParams (clip, given, mesh);
   const MeshPose pose (clip, frame, params, mesh);
   double lowest = std::numeric_limits<double>::infinity ();
-  if (params.dressed ())
-  {
-    // Shoes lower the soles: pose and dress every vertex, as buildMeshBody does.
-    std::vector<Eigen::Vector3d> posed (mesh.vertices ().size ());
-    for (std::size_t v = 0; v < posed.size (); ++v)
-      posed[v] = pose.vertex (v);
-    dressVertices (posed, mesh, params);
-    for (const auto &p : posed)
-      lowest = std::min (lowest, p.y ());
-    return lowest;
-  }
+  // Clothes: at the lowest point the outward normal points down, so a dressed vertex
+  // there lies its offset lower (to first order; exact for a sole flat on the floor).
+  const std::vector<double> offsets = clothesOffsets (mesh, params);
   for (std::size_t v = 0; v < mesh.vertices ().size (); ++v)
   {
     const HumanMesh::Part part = mesh.parts ()[v];
     if (part == HumanMesh::LeftFoot || part == HumanMesh::RightFoot || v % 16 == 0)
-      lowest = std::min (lowest, pose.vertex (v).y ());
+      lowest = std::min (lowest, pose.vertex (v).y () - (offsets.empty () ? 0.0 : offsets[v]));
   }
   return lowest;
 }

@@ -141,8 +141,8 @@ parseSynthFlags (int argc, char **argv, SynthFlags &flags)
      "with --body-mesh: give each subject its own MakeHuman body shape (gender, age, muscle, weight, height; "
      "targets/macrodetails of the --body-mesh directory), 1.5-2.0 m tall, slim to heavy")
     ("clothes", po::bool_switch (&options.clothes),
-     "with --body-mesh: dress each subject (sleeves and trousers 0.3-2.5 cm, shoes 0.8-2.5 cm, hands 0-0.8 cm "
-     "thicker than the bare mesh), drawn from the seed")
+     "with --body-mesh: dress each subject (sleeves and trousers 0.3-2.5 cm, shoes 0.8-2.5 cm, hands 0.2-1 cm, "
+     "hair 0-3 cm thicker than the bare mesh), drawn from the seed")
     ("colour", po::bool_switch (&options.colour),
      "also paint each frame in colour (random clothes, room and light; sr4000 and kinect): XYZRGBA frames for "
      "agex_annotate rgbd; the depth stays the same");

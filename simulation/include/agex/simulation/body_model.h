@@ -88,7 +88,8 @@ std::vector<Eigen::Vector3d> meshBoneHeads (const MotionClip &clip, int frame, c
                                             const HumanMesh &mesh);
 
 /** Lowest point (Y) of the posed mesh body's feet and a sample of its other vertices:
-  * what the floor is placed by, without building the whole body. */
+  * what the floor is placed by, without building the whole body (dressed: each vertex
+  * lowered by its clothes' thickness). */
 double meshBodyLowest (const MotionClip &clip, int frame, const BodyParams &params, const HumanMesh &mesh);
 
 /** Height of the body model in the clip's rest pose (head top to sole), metres. */

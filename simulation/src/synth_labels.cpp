@@ -14,7 +14,10 @@ namespace agex
 int
 labelWindow (const SensorModel &sensor)
 {
-  return sensor.sensor == SynthSensor::Kinect ? 2 : 1;
+  // The Kinect's correlation window hands a pixel to the surface dominating its window, so
+  // the surface seen at a tip can lie up to half a window from its pixel (a fingertip of a
+  // visible hand shows the wall behind it).
+  return sensor.sensor == SynthSensor::Kinect ? std::max (2, sensor.kinect_window / 2) : 1;
 }
 
 void

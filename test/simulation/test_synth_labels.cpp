@@ -481,3 +481,41 @@ TEST (SynthPartLabels, LabelImagesRoundTripThroughTheDataset)
   }
 }
 }  // namespace
+
+namespace
+{
+// The Kinect's correlation window hands a fingertip's pixel to the wall behind it; the hand
+// is still in view, so its label must stay visible (labelWindow follows the window).
+TEST (SynthPartLabels, TheCorrelationWindowKeepsVisibleHandsLabelled)
+{
+  AGEX_REQUIRE_MOCAP (sharedData ("mocap/cmu_131_01.bvh"));
+  AGEX_REQUIRE_MAKEHUMAN ();
+  agex::SynthOptions options;
+  options.motion_files = {sharedData ("mocap/cmu_131_01.bvh")};
+  options.sensor = agex::SynthSensor::Kinect;
+  options.body_mesh = sharedData ("makehuman");
+  options.min_distance = 1.8;
+  options.max_distance = 2.4;
+  options.seed = 31;
+  const agex::SynthGenerator plain (options);
+  options.kinect_window = 9;
+  const agex::SynthGenerator windowed (options);
+  EXPECT_EQ (agex::labelWindow (plain.sensor ()), 2);
+  EXPECT_EQ (agex::labelWindow (windowed.sensor ()), 4);
+  int visible_plain = 0, visible_windowed = 0;
+  for (std::uint64_t i = 0; i < 8; ++i)
+  {
+    const agex::SynthFrame a = plain.render (i), b = windowed.render (i);
+    ASSERT_EQ (a.labels.size (), b.labels.size ());
+    for (std::size_t l = 0; l < a.labels.size (); ++l)
+      if (a.labels[l].part == agex::BodyPart::Hand)
+      {
+        visible_plain += a.labels[l].visible;
+        visible_windowed += b.labels[l].visible;
+      }
+  }
+  EXPECT_GE (visible_plain, 8) << "the clip's hands are in view";
+  EXPECT_GE (visible_windowed * 10, visible_plain * 8) << visible_windowed << " of " << visible_plain
+                                                        << " visible hands stay visible under the window";
+}
+}  // namespace

@@ -21,6 +21,7 @@ void makeLabels (const BodyModel &body_in_camera, const SensorModel &sensor, Syn
 void appendPersonLabels (const BodyModel &body_in_camera, const SensorModel &sensor, int first_primitive, int person,
                          SynthFrame &frame);
 
-/** Half size of the label visibility window: 1 (3x3) for sr4000, 2 (5x5) for kinect. */
+/** Half size of the label visibility window: 1 (3x3) for sr4000, 2 (5x5) for kinect, or
+  * half its correlation window if that is larger (4 for kinect_window 9). */
 int labelWindow (const SensorModel &sensor);
 }  // namespace agex

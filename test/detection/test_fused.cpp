@@ -7,6 +7,7 @@
 
 #include <agex/detection/body_part_detector.h>
 #include <agex/detection/fused_candidates.h>
+#include <agex/detection/tip_refinement.h>
 #include <agex/detection/training_samples.h>
 
 #include <gtest/gtest.h>
@@ -339,4 +340,73 @@ TEST (TrainingExamples, BackgroundThinnedToTheRatioKeepingEveryPositiveInOrder)
   EXPECT_THROW (agex::keepBackgroundAtMost (std::nanf (""), rng, p, none, c), std::invalid_argument);
   EXPECT_THROW (agex::keepBackgroundAtMost (-1.f, rng, p, none, c), std::invalid_argument);
   EXPECT_EQ (p.size (), 46u);
+}
+
+namespace
+{
+agex::ScoredCandidate
+scoredAt (agex::BodyPart part, float confidence, const Eigen::Vector3f &position, int rank, float geodesic, int mesh = 0)
+{
+  agex::ScoredCandidate s;
+  s.detection.part = part;
+  s.detection.confidence = confidence;
+  s.detection.position = position;
+  s.detection.orientation = Eigen::Vector3f::UnitY ();
+  s.detection.u = static_cast<int> (100 * position.x ()) + 50;
+  s.detection.v = static_cast<int> (100 * position.y ()) + 50;
+  s.detection.rank = rank;
+  s.detection.mesh = mesh;
+  s.confidences[static_cast<std::size_t> (part)] = confidence;
+  s.geodesic_distance = geodesic;
+  return s;
+}
+}  // namespace
+
+// A foot found at the ankle (a part mode, confident) moves to the toe's AGEX point 8 cm
+// beyond it, which the classifier also takes for a foot, keeping its own class and confidence;
+// not to a farther AGEX point beyond the radius, on another mesh, or one the classifier
+// takes for something else.
+TEST (TipRefinement, MovesADetectionToItsPartsExtremityTheClassifierAgreesWith)
+{
+  using agex::BodyPart;
+  std::vector<agex::ScoredCandidate> scored{
+    scoredAt (BodyPart::Foot, 0.9f, {0.f, 0.f, 2.f}, 0, 0.f),       // the ankle
+    scoredAt (BodyPart::Foot, 0.6f, {0.f, 0.08f, 2.f}, 3, 1.1f),    // the toe
+    scoredAt (BodyPart::Foot, 0.8f, {0.f, 0.3f, 2.f}, 2, 1.4f),     // beyond the radius
+    scoredAt (BodyPart::Foot, 0.8f, {0.05f, 0.f, 2.f}, 4, 1.5f, 1), // another mesh
+  };
+  agex::ScoredCandidate hand = scoredAt (BodyPart::Hand, 0.95f, {0.f, 0.05f, 2.f}, 1, 1.3f);
+  hand.confidences[static_cast<std::size_t> (BodyPart::Foot)] = 0.2f;  // under half the ankle's 0.9
+  scored.push_back (hand);
+
+  const auto off = agex::refineToTips (scored, agex::TipRefinementParams ());
+  ASSERT_EQ (off.size (), scored.size ());
+  for (std::size_t i = 0; i < off.size (); ++i)
+    EXPECT_TRUE (off[i].position.isApprox (scored[i].detection.position)) << i;
+
+  agex::TipRefinementParams params;
+  params.radius = 0.1f;
+  const auto moved = agex::refineToTips (scored, params);
+  ASSERT_EQ (moved.size (), scored.size ());
+  EXPECT_EQ (moved[0].part, BodyPart::Foot);
+  EXPECT_FLOAT_EQ (moved[0].confidence, 0.9f);
+  EXPECT_TRUE (moved[0].position.isApprox (scored[1].detection.position));
+  EXPECT_EQ (moved[0].u, scored[1].detection.u);
+  EXPECT_EQ (moved[0].v, scored[1].detection.v);
+  EXPECT_EQ (moved[0].rank, 3);
+  // The toe is its own extremity; the hand has no farther hand nearby.
+  EXPECT_TRUE (moved[1].position.isApprox (scored[1].detection.position));
+  EXPECT_TRUE (moved[4].position.isApprox (scored[4].detection.position));
+
+  // With the hand agreeing it might be a foot, the ankle goes to it: it is farther along.
+  scored[4].confidences[static_cast<std::size_t> (BodyPart::Foot)] = 0.5f;
+  EXPECT_TRUE (agex::refineToTips (scored, params)[0].position.isApprox (scored[4].detection.position));
+  params.min_relative_confidence = 0.6f;  // 0.5 is under 0.6 of 0.9
+  EXPECT_TRUE (agex::refineToTips (scored, params)[0].position.isApprox (scored[1].detection.position));
+
+  params.radius = 0.6f;
+  EXPECT_THROW (params.validate ([] (const std::string &k) { return k; }), std::invalid_argument);
+  params.radius = 0.1f;
+  params.min_relative_confidence = 0.f;
+  EXPECT_THROW (params.validate ([] (const std::string &k) { return k; }), std::invalid_argument);
 }

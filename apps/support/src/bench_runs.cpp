@@ -144,6 +144,8 @@ benchDataset (const std::string &spec, bool keyframes_only, const LoadedDetector
           {"forest_stride", loaded.forest_stride},
           {"cascade_min_confidence", loaded.cascade_min_confidence},
           {"cascade_miss_rate", loaded.cascade_miss_rate},
+          {"tip_radius", loaded.tip_refinement.radius},
+          {"tip_min_confidence", loaded.tip_refinement.min_relative_confidence},
           {"frames", clouds.size ()},
           {"width", clouds.front ()->width},
           {"height", clouds.front ()->height},

@@ -44,6 +44,21 @@ detectorOptionsDescription (DetectorChoice &choice, const std::string &model_def
      }),
      "the fraction of each class's training positives reaching the cascade's level (the largest at most "
      "--cascade-min-confidence) it may reject (0: none)")
+    ("tip-radius",
+     po::value (&choice.tip_refinement.radius)->default_value (choice.tip_refinement.radius)->notifier ([] (float v) {
+       if (!(v >= 0.f && v <= 0.5f))
+         throw std::runtime_error ("--tip-radius must lie in [0, 0.5] metres");
+     }),
+     "fused models: each detection moves up to this far (metres) to its part's extremity, the AGEX point of its "
+     "mesh farthest from the centroid that the classifier also takes for that part (0: off)")
+    ("tip-min-confidence",
+     po::value (&choice.tip_refinement.min_relative_confidence)
+       ->default_value (choice.tip_refinement.min_relative_confidence)
+       ->notifier ([] (float v) {
+         if (!(v > 0.f && v <= 1.f))
+           throw std::runtime_error ("--tip-min-confidence must lie in (0, 1]");
+       }),
+     "the extremity's confidence for the detection's class, as a fraction of the detection's, at least this")
     ("forest-input", po::value (&choice.forest_input)->default_value (choice.forest_input)->notifier ([] (const std::string &v) {
        ForestInput input;
        if (!parseForestInput (v, input))
@@ -70,6 +85,7 @@ LoadedDetector::configure (BodyPartDetector<pcl::PointXYZ> &detector) const
   detector.setForestStride (forest_stride);
   detector.setCascadeMinConfidence (cascade_min_confidence);
   detector.setCascadeMissRate (cascade_miss_rate);
+  detector.setTipRefinement (tip_refinement);
   detector.setForestParts (forest_parts);
 }
 
@@ -106,6 +122,7 @@ loadDetector (const DetectorChoice &choice, DetectorKind kind)
   loaded.forest_stride = choice.forest_stride;
   loaded.cascade_min_confidence = choice.cascade_min_confidence;
   loaded.cascade_miss_rate = choice.cascade_miss_rate;
+  loaded.tip_refinement = choice.tip_refinement;
   if (!parseForestInput (choice.forest_input, loaded.forest_parts.input))
     throw std::runtime_error ("--forest-input must be automatic, persons or meshes, not '" + choice.forest_input + "'");
   if (!parsePartProposals (choice.forest_parts, loaded.forest_parts.proposals))

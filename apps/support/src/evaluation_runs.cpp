@@ -262,7 +262,7 @@ reportDetection (const DetectionTally &tally, const nlohmann::json &about, const
 
 /** The keys of a detect report that say what was evaluated how: equal in every share. */
 const char *const kRunKeys[] = {"dataset", "model", "detector_mode", "forest", "radius_m", "min_iou",
-                                "cascade_min_confidence", "cascade_miss_rate"};
+                                "cascade_min_confidence", "cascade_miss_rate", "tip_radius", "tip_min_confidence"};
 }  // namespace
 
 int
@@ -272,7 +272,9 @@ evaluateDetection (const DatasetSelection &selection, const LoadedDetector &load
   nlohmann::json about = {{"dataset", selection.dataset.directory ()}, {"model", loaded.files.front ()},
                           {"detector_mode", loaded.mode_name},
                           {"cascade_min_confidence", loaded.cascade_min_confidence},
-                          {"cascade_miss_rate", loaded.cascade_miss_rate}};
+                          {"cascade_miss_rate", loaded.cascade_miss_rate},
+                          {"tip_radius", loaded.tip_refinement.radius},
+                          {"tip_min_confidence", loaded.tip_refinement.min_relative_confidence}};
   if (loaded.files.size () > 1)
     about["forest"] = loaded.files.back ();
   if (loaded.mode == DetectorMode::Forest)

@@ -8,6 +8,7 @@
 #include <agex/detection/detector_model.h>
 #include <agex/detection/forest_parts.h>
 #include <agex/detection/fused_candidates.h>
+#include <agex/detection/tip_refinement.h>
 
 #include <pcl/pcl_base.h>
 
@@ -114,6 +115,16 @@ public:
   static constexpr float kDefaultCascadeMinConfidence = 0.05f;
   static constexpr float kDefaultCascadeMissRate = 0.f;  // 0.02 costs held-out hands (doc/benchmarks.md)
 
+  /** \brief Fused models: each detection moved to its part's extremity, the AGEX point of
+    * its mesh the classifier also takes for that part (agex::refineToTips). Default:
+    * TipRefinementParams (). \throws std::invalid_argument on a setting out of range */
+  void setTipRefinement (const TipRefinementParams &params)
+  {
+    params.validate ([] (const std::string &key) { return "TipRefinementParams::" + key; });
+    tip_refinement_ = params;
+  }
+  const TipRefinementParams &getTipRefinement () const { return tip_refinement_; }
+
   /** \brief How Forest mode labels and names parts (agex::ForestPartSettings; default: the
     * persons as segmented, PCL-style blobs at their extremities). A fused model keeps its
     * training's meshes and modes.
@@ -178,6 +189,7 @@ private:
   int forest_stride_ = 1;
   float cascade_min_confidence_ = kDefaultCascadeMinConfidence;
   float cascade_miss_rate_ = kDefaultCascadeMissRate;
+  TipRefinementParams tip_refinement_;
   ForestPartSettings forest_parts_;
   pcl::PointCloud<pcl::PointXYZ>::Ptr xyz_frame_;  ///< the input as XYZ, for other point types
   pcl::PointCloud<BodyPartLabelPoint> part_labels_;

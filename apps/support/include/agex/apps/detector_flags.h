@@ -23,6 +23,7 @@ struct DetectorChoice
   int forest_stride = 1;
   float cascade_min_confidence = BodyPartDetector<pcl::PointXYZ>::kDefaultCascadeMinConfidence;
   float cascade_miss_rate = BodyPartDetector<pcl::PointXYZ>::kDefaultCascadeMissRate;
+  TipRefinementParams tip_refinement;
   std::string forest_input = "automatic";  ///< forest mode: automatic, persons or meshes (agex::ForestInput)
   std::string forest_parts = "blobs";    ///< forest mode: blobs or modes (agex::PartProposals)
 };
@@ -40,6 +41,7 @@ struct LoadedDetector
   int forest_stride = 1;
   float cascade_min_confidence = BodyPartDetector<pcl::PointXYZ>::kDefaultCascadeMinConfidence;
   float cascade_miss_rate = BodyPartDetector<pcl::PointXYZ>::kDefaultCascadeMissRate;
+  TipRefinementParams tip_refinement;
   ForestPartSettings forest_parts;
   /** What names the parts: "agex", "fused", "sliding_window" (the model's kind) or "forest". */
   std::string mode_name;

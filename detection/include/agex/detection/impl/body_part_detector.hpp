@@ -263,7 +263,7 @@ agex::BodyPartDetector<PointT>::classifyFused (std::vector<BodyPartDetection> &d
   std::vector<float> aux (fusedFeatureNames ().size ());
   const int classes = classifier.classes ();
   std::vector<float> margins (classes), confidences (classes);
-  std::vector<BodyPartDetection> named;
+  std::vector<ScoredCandidate> scored;
   for (std::size_t i = 0; i < patches.size () && i < candidates.size (); ++i)
   {
     features.compute (candidates[i], aux.data ());
@@ -282,9 +282,15 @@ agex::BodyPartDetector<PointT>::classifyFused (std::vector<BodyPartDetection> &d
     d.v = width > 0 ? c.index / width : 0;
     d.rank = c.agex_rank;
     d.mesh = c.mesh;
-    named.push_back (d);
+    ScoredCandidate s;
+    s.detection = d;
+    for (int k = 0; k < classes && k < kBodyPartCount; ++k)
+      s.confidences[static_cast<std::size_t> (k)] = confidences[static_cast<std::size_t> (k)];
+    s.geodesic_distance = c.agex_rank > 0 ? c.geodesic_distance : 0.f;
+    scored.push_back (s);
   }
   patches_classified_ = std::min (patches.size (), candidates.size ());
+  std::vector<BodyPartDetection> named = refineToTips (scored, tip_refinement_);
   suppress (named, detections);
   intermediate_.ms.emplace_back ("classify", msSince (start));
 }

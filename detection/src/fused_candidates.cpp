@@ -204,6 +204,15 @@ fusedFeatureNames ()
   return names;
 }
 
+int
+FusedFeatures::meshOf (const FusedCandidate &candidate) const
+{
+  if (candidate.mesh >= 0)
+    return candidate.mesh;
+  const int i = candidate.index;
+  return i >= 0 && static_cast<std::size_t> (i) < mesh_of_.size () ? mesh_of_[static_cast<std::size_t> (i)] : -1;
+}
+
 FusedFeatures::FusedFeatures (const DepthPipelineResult &prepared, const pcl::PointCloud<BodyPartLabelPoint> &labels,
                               const std::vector<PartMode> &modes, float fx, const Eigen::Vector3f &up)
   : prepared_ (prepared), labels_ (labels), modes_ (modes), fx_ (fx), up_ (up.normalized ())
@@ -300,9 +309,7 @@ FusedFeatures::compute (const FusedCandidate &c, float *out) const
   *f++ = (c.sources & kFromModePosition) ? 1.f : 0.f;
   *f++ = (c.sources & kFromModeEnd) ? 1.f : 0.f;
   // Where on its person.
-  int mesh = c.mesh;
-  if (mesh < 0 && c.index >= 0 && static_cast<std::size_t> (c.index) < mesh_of_.size ())
-    mesh = mesh_of_[static_cast<std::size_t> (c.index)];
+  const int mesh = meshOf (c);
   float relative = 0.5f, extent = 0.f;
   if (mesh >= 0 && static_cast<std::size_t> (mesh) < mesh_extent_.size ())
   {

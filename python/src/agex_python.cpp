@@ -391,7 +391,8 @@ class PyDetector
 {
 public:
   PyDetector (std::optional<std::string> model, std::optional<std::string> forest, std::optional<std::string> mode,
-              int forest_stride, float cascade_min_confidence, float cascade_miss_rate)
+              int forest_stride, float cascade_min_confidence, float cascade_miss_rate, float tip_radius,
+              float tip_min_confidence)
   {
     const std::string model_path = model ? checkedPath ("model", *model) : bundledDataFile ("models/agex_bonn.yml");
     if (forest)
@@ -409,6 +410,11 @@ public:
       throw std::invalid_argument ("cascade_miss_rate must lie in [0, 0.5]");
     cascade_min_confidence_ = cascade_min_confidence;
     cascade_miss_rate_ = cascade_miss_rate;
+    tip_refinement_.radius = tip_radius;
+    tip_refinement_.min_relative_confidence = tip_min_confidence;
+    tip_refinement_.validate ([] (const std::string &key) {
+      return std::string (key == "radius" ? "tip_radius" : "tip_min_confidence");
+    });
     py::gil_scoped_release release;
     model_ = std::make_shared<const agex::DetectorModel> (agex::DetectorModel::load (model_path));
     model_path_ = model_path;
@@ -439,6 +445,7 @@ public:
       detector->setForestStride (forest_stride_);
       detector->setCascadeMinConfidence (cascade_min_confidence_);
       detector->setCascadeMissRate (cascade_miss_rate_);
+      detector->setTipRefinement (tip_refinement_);
       // A PCD carries no intrinsics: the detector estimates them (0), whatever the last frame had.
       if (frame->has_intrinsics ())
         detector->setFocalLength (static_cast<float> (frame->frame.intrinsics.fx),
@@ -572,6 +579,7 @@ private:
   int forest_stride_ = 1;
   float cascade_min_confidence_ = agex::BodyPartDetector<pcl::PointXYZ>::kDefaultCascadeMinConfidence;
   float cascade_miss_rate_ = agex::BodyPartDetector<pcl::PointXYZ>::kDefaultCascadeMissRate;
+  agex::TipRefinementParams tip_refinement_;
   std::string model_path_, forest_path_;
   mutable std::mutex mutex_;
   std::shared_ptr<agex::BodyPartDetector<pcl::PointXYZ>> last_;
@@ -696,15 +704,19 @@ PYBIND11_MODULE (_agex, m)
 
   py::class_<PyDetector> (m, "BodyPartDetector", "Heads, hands and feet: agex::BodyPartDetector")
     .def (py::init<std::optional<std::string>, std::optional<std::string>, std::optional<std::string>, int, float,
-                   float> (),
+                   float, float, float> (),
           py::arg ("model") = py::none (), py::arg ("forest") = py::none (), py::arg ("mode") = py::none (),
           py::arg ("forest_stride") = 1,
           py::arg ("cascade_min_confidence") = agex::BodyPartDetector<pcl::PointXYZ>::kDefaultCascadeMinConfidence,
           py::arg ("cascade_miss_rate") = agex::BodyPartDetector<pcl::PointXYZ>::kDefaultCascadeMissRate,
+          py::arg ("tip_radius") = agex::TipRefinementParams ().radius,
+          py::arg ("tip_min_confidence") = agex::TipRefinementParams ().min_relative_confidence,
           "model: a model file (default: the bundled agex_bonn.yml); forest: a body-part forest (an agex forest file, "
           "a PCL tree file or a directory of them); mode: 'model' (default) or 'forest' (the forest's part modes "
           "alone); forest_stride: one evaluated pixel per stride x stride cell; cascade_min_confidence, "
-          "cascade_miss_rate: the classifier's soft cascade, as agex_detect's flags (0: every candidate in full)")
+          "cascade_miss_rate: the classifier's soft cascade, as agex_detect's flags (0: every candidate in full); "
+          "tip_radius, tip_min_confidence: fused hands and feet moved to their part's extremity, as agex_detect's "
+          "--tip-radius and --tip-min-confidence (0: off)")
     .def ("detect", &PyDetector::detect, py::arg ("depth"), py::arg ("fx") = py::none (), py::arg ("fy") = py::none (),
           py::arg ("cx") = py::none (), py::arg ("cy") = py::none (), py::arg ("depth_scale") = py::none (),
           py::kw_only (), py::arg ("return_intermediate") = false,

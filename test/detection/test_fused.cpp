@@ -12,6 +12,7 @@
 
 #include <gtest/gtest.h>
 
+#include <limits>
 #include <random>
 
 namespace
@@ -362,22 +363,30 @@ scoredAt (agex::BodyPart part, float confidence, const Eigen::Vector3f &position
 }
 }  // namespace
 
-// A foot found at the ankle (a part mode, confident) moves to the toe's AGEX point 8 cm
-// beyond it, which the classifier also takes for a foot, keeping its own class and confidence;
-// not to a farther AGEX point beyond the radius, on another mesh, or one the classifier
-// takes for something else.
-TEST (TipRefinement, MovesADetectionToItsPartsExtremityTheClassifierAgreesWith)
+// One person's mesh 0, AGEX points as AGEX ranks them (rank 1 the centroid, then each extremum
+// found at a geodesic distance no larger than the one before): a hand held beside the head
+// (rank 2), the head (3), the toe (4), the heel (5). A foot found at the ankle (a part mode) and
+// one at the heel move to the toe; a hand found at the wrist moves to the hand's point; the head
+// stays, though the hand beside it is a more salient extremum the classifier also takes for a
+// head; nothing moves beyond the radius, to another mesh, or from off every mesh.
+TEST (TipRefinement, HandsAndFeetMoveToTheirPartsMostSalientExtremumTheClassifierAgreesWith)
 {
   using agex::BodyPart;
+  const auto part = [] (BodyPart p) { return static_cast<std::size_t> (p); };
   std::vector<agex::ScoredCandidate> scored{
-    scoredAt (BodyPart::Foot, 0.9f, {0.f, 0.f, 2.f}, 0, 0.f),       // the ankle
-    scoredAt (BodyPart::Foot, 0.6f, {0.f, 0.08f, 2.f}, 3, 1.1f),    // the toe
-    scoredAt (BodyPart::Foot, 0.8f, {0.f, 0.3f, 2.f}, 2, 1.4f),     // beyond the radius
-    scoredAt (BodyPart::Foot, 0.8f, {0.05f, 0.f, 2.f}, 4, 1.5f, 1), // another mesh
+    scoredAt (BodyPart::Foot, 0.1f, {0.f, -0.3f, 2.f}, 1, 0.f),       // 0 the centroid
+    scoredAt (BodyPart::Hand, 0.9f, {0.08f, -1.f, 2.f}, 2, 1.4f),     // 1 the hand beside the head
+    scoredAt (BodyPart::Head, 0.9f, {0.f, -1.f, 2.f}, 3, 1.2f),       // 2 the head
+    scoredAt (BodyPart::Foot, 0.6f, {0.f, 0.8f, 2.f}, 4, 1.1f),       // 3 the toe
+    scoredAt (BodyPart::Foot, 0.7f, {0.f, 0.75f, 2.05f}, 5, 0.3f),    // 4 the heel
+    scoredAt (BodyPart::Foot, 0.9f, {0.f, 0.72f, 2.f}, 0, 0.f),       // 5 the ankle, a part mode
+    scoredAt (BodyPart::Hand, 0.95f, {0.08f, -0.92f, 2.f}, 0, 0.f),   // 6 the wrist, a part mode
+    scoredAt (BodyPart::Foot, 0.9f, {0.f, 0.76f, 2.f}, 0, 0.f, -1),   // 7 off every mesh
+    scoredAt (BodyPart::Foot, 0.8f, {0.03f, 0.72f, 2.f}, 2, 1.5f, 1), // 8 another person's foot
   };
-  agex::ScoredCandidate hand = scoredAt (BodyPart::Hand, 0.95f, {0.f, 0.05f, 2.f}, 1, 1.3f);
-  hand.confidences[static_cast<std::size_t> (BodyPart::Foot)] = 0.2f;  // under half the ankle's 0.9
-  scored.push_back (hand);
+  scored[2].confidences[part (BodyPart::Hand)] = 0.2f;
+  scored[1].confidences[part (BodyPart::Head)] = 0.8f;  // the classifier half takes the hand for a head
+  scored[1].confidences[part (BodyPart::Foot)] = 0.6f;  // and for a foot (too far from the feet)
 
   const auto off = agex::refineToTips (scored, agex::TipRefinementParams ());
   ASSERT_EQ (off.size (), scored.size ());
@@ -388,25 +397,33 @@ TEST (TipRefinement, MovesADetectionToItsPartsExtremityTheClassifierAgreesWith)
   params.radius = 0.1f;
   const auto moved = agex::refineToTips (scored, params);
   ASSERT_EQ (moved.size (), scored.size ());
-  EXPECT_EQ (moved[0].part, BodyPart::Foot);
-  EXPECT_FLOAT_EQ (moved[0].confidence, 0.9f);
-  EXPECT_TRUE (moved[0].position.isApprox (scored[1].detection.position));
-  EXPECT_EQ (moved[0].u, scored[1].detection.u);
-  EXPECT_EQ (moved[0].v, scored[1].detection.v);
-  EXPECT_EQ (moved[0].rank, 3);
-  // The toe is its own extremity; the hand has no farther hand nearby.
-  EXPECT_TRUE (moved[1].position.isApprox (scored[1].detection.position));
-  EXPECT_TRUE (moved[4].position.isApprox (scored[4].detection.position));
+  const auto at = [&] (std::size_t i, std::size_t where) {
+    return moved[i].position.isApprox (scored[where].detection.position) && moved[i].u == scored[where].detection.u &&
+           moved[i].v == scored[where].detection.v && moved[i].rank == scored[where].detection.rank;
+  };
+  EXPECT_TRUE (at (5, 3)) << "the ankle goes to the toe";
+  EXPECT_TRUE (at (4, 3)) << "the heel goes to the toe";
+  EXPECT_TRUE (at (6, 1)) << "the wrist goes to the hand";
+  EXPECT_EQ (moved[5].part, BodyPart::Foot);
+  EXPECT_FLOAT_EQ (moved[5].confidence, 0.9f);
+  EXPECT_EQ (moved[6].part, BodyPart::Hand);
+  EXPECT_FLOAT_EQ (moved[6].confidence, 0.95f);
+  for (const std::size_t stays : {0u, 1u, 2u, 3u, 7u, 8u})
+    EXPECT_TRUE (at (stays, stays)) << stays;
 
-  // With the hand agreeing it might be a foot, the ankle goes to it: it is farther along.
-  scored[4].confidences[static_cast<std::size_t> (BodyPart::Foot)] = 0.5f;
-  EXPECT_TRUE (agex::refineToTips (scored, params)[0].position.isApprox (scored[4].detection.position));
-  params.min_relative_confidence = 0.6f;  // 0.5 is under 0.6 of 0.9
-  EXPECT_TRUE (agex::refineToTips (scored, params)[0].position.isApprox (scored[1].detection.position));
+  // The classifier must agree: with the toe under half the ankle's confidence for a foot, the
+  // ankle goes to the next extremum that reaches it, the heel; asking for 0.8, not even there.
+  scored[3].confidences[part (BodyPart::Foot)] = 0.4f;
+  const auto doubted = agex::refineToTips (scored, params);
+  EXPECT_TRUE (doubted[5].position.isApprox (scored[4].detection.position));
+  params.min_relative_confidence = 0.8f;  // 0.7 is under 0.8 of 0.9
+  EXPECT_TRUE (agex::refineToTips (scored, params)[5].position.isApprox (scored[5].detection.position));
 
   params.radius = 0.6f;
   EXPECT_THROW (params.validate ([] (const std::string &k) { return k; }), std::invalid_argument);
   params.radius = 0.1f;
   params.min_relative_confidence = 0.f;
+  EXPECT_THROW (params.validate ([] (const std::string &k) { return k; }), std::invalid_argument);
+  params.min_relative_confidence = std::numeric_limits<float>::quiet_NaN ();
   EXPECT_THROW (params.validate ([] (const std::string &k) { return k; }), std::invalid_argument);
 }

@@ -191,7 +191,9 @@ TEST (MetricPipeline, MinSeparationStopsAgexAtTheFiguresExtremities)
   {
     EXPECT_EQ (some.interest_points[i].getVector3fMap (), all.interest_points[i].getVector3fMap ()) << i;
     if (i > 0)
+    {
       EXPECT_GE (some.interest_points[i].geodesic_distance, 0.2f) << i;
+    }
   }
   EXPECT_LT (all.interest_points[some.interest_points.size ()].geodesic_distance, 0.2f);
 }

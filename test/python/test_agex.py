@@ -86,6 +86,22 @@ def test_the_cascade_off_keeps_every_candidate_and_the_confident_detections(dete
         assert d in with_cascade
 
 
+def test_the_tip_refinement_moves_hands_and_feet_only_and_keeps_their_confidences(detector):
+    frame = agex.load_frame(FRAME)
+    before = detector.detect(frame)
+    after = agex.BodyPartDetector(tip_radius=0.1).detect(frame)
+    # Each class keeps its most confident detection's confidence; heads stay where they were.
+    for part in ("head", "hand", "foot"):
+        assert max(d["confidence"] for d in after if d["class"] == part) == \
+            max(d["confidence"] for d in before if d["class"] == part)
+    assert [d for d in after if d["class"] == "head"] == [d for d in before if d["class"] == "head"]
+    # Some hand or foot moves (on this frame, with the bundled model), each onto an AGEX point.
+    where = {(d["class"], d["confidence"]): d["pixel"] for d in before}
+    moved = [d for d in after if where.get((d["class"], d["confidence"]), d["pixel"]) != d["pixel"]]
+    assert moved
+    assert all(d["class"] != "head" and d["rank"] > 0 for d in moved)
+
+
 def test_same_detections_from_a_numpy_array(detector, grey):
     expected = detector.detect(agex.load_frame(FRAME))
     # The frame's own grey levels back-projected as loadFrame does: the same detections exactly.
@@ -167,6 +183,10 @@ def test_bad_intrinsics_and_settings_are_refused(detector):
         agex.BodyPartDetector(cascade_min_confidence=1.0)
     with pytest.raises(ValueError, match="cascade_miss_rate"):
         agex.BodyPartDetector(cascade_miss_rate=float("nan"))
+    with pytest.raises(ValueError, match="tip_radius"):
+        agex.BodyPartDetector(tip_radius=0.6)
+    with pytest.raises(ValueError, match="tip_min_confidence"):
+        agex.BodyPartDetector(tip_min_confidence=float("nan"))
     # An empty, all-invalid frame: no detections, no error.
     assert detector.detect(np.zeros((48, 64), np.uint16), 100.0, 100.0, 32.0, 24.0) == []
 

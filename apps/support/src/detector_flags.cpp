@@ -49,8 +49,8 @@ detectorOptionsDescription (DetectorChoice &choice, const std::string &model_def
        if (!(v >= 0.f && v <= 0.5f))
          throw std::runtime_error ("--tip-radius must lie in [0, 0.5] metres");
      }),
-     "fused models: each detection moves up to this far (metres) to its part's extremity, the AGEX point of its "
-     "mesh farthest from the centroid that the classifier also takes for that part (0: off)")
+     "fused models: each hand and foot detection moves up to this far (metres) to its part's extremity, the most "
+     "salient AGEX point of its mesh there that the classifier also takes for that part (0: off)")
     ("tip-min-confidence",
      po::value (&choice.tip_refinement.min_relative_confidence)
        ->default_value (choice.tip_refinement.min_relative_confidence)

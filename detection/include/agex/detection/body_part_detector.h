@@ -115,8 +115,8 @@ public:
   static constexpr float kDefaultCascadeMinConfidence = 0.05f;
   static constexpr float kDefaultCascadeMissRate = 0.f;  // 0.02 costs held-out hands (doc/benchmarks.md)
 
-  /** \brief Fused models: each detection moved to its part's extremity, the AGEX point of
-    * its mesh the classifier also takes for that part (agex::refineToTips). Default:
+  /** \brief Fused models: each hand and foot detection moved to its part's extremity, an AGEX
+    * point of its mesh the classifier also takes for that part (agex::refineToTips). Default:
     * TipRefinementParams (). \throws std::invalid_argument on a setting out of range */
   void setTipRefinement (const TipRefinementParams &params)
   {

@@ -103,6 +103,8 @@ public:
   FusedFeatures (const DepthPipelineResult &prepared, const pcl::PointCloud<BodyPartLabelPoint> &labels,
                  const std::vector<PartMode> &modes, float fx, const Eigen::Vector3f &up);
   void compute (const FusedCandidate &candidate, float *out) const;
+  /** The candidate's mesh: its own (AGEX points), else the one its pixel lies on; -1: none. */
+  int meshOf (const FusedCandidate &candidate) const;
 
 private:
   void meanProbabilities (int index, const Eigen::Vector3f &at, float radius, float *out) const;

@@ -281,7 +281,7 @@ agex::BodyPartDetector<PointT>::classifyFused (std::vector<BodyPartDetection> &d
     d.u = width > 0 ? c.index % width : 0;
     d.v = width > 0 ? c.index / width : 0;
     d.rank = c.agex_rank;
-    d.mesh = c.mesh;
+    d.mesh = features.meshOf (c);  // a part mode's pixel has one too (the refinement needs it)
     ScoredCandidate s;
     s.detection = d;
     for (int k = 0; k < classes && k < kBodyPartCount; ++k)

@@ -95,11 +95,14 @@ def test_the_tip_refinement_moves_hands_and_feet_only_and_keeps_their_confidence
         assert max(d["confidence"] for d in after if d["class"] == part) == \
             max(d["confidence"] for d in before if d["class"] == part)
     assert [d for d in after if d["class"] == "head"] == [d for d in before if d["class"] == "head"]
-    # Some hand or foot moves (on this frame, with the bundled model), each onto an AGEX point.
-    where = {(d["class"], d["confidence"]): d["pixel"] for d in before}
-    moved = [d for d in after if where.get((d["class"], d["confidence"]), d["pixel"]) != d["pixel"]]
+    # Some hand or foot moves (on this frame, with the bundled model), each onto an AGEX point;
+    # among them a part mode's (rank 0), which takes its pixel's mesh to find one.
+    was = {(d["class"], d["confidence"]): d for d in before}
+    moved = [(was[(d["class"], d["confidence"])], d) for d in after
+             if (d["class"], d["confidence"]) in was and was[(d["class"], d["confidence"])]["pixel"] != d["pixel"]]
     assert moved
-    assert all(d["class"] != "head" and d["rank"] > 0 for d in moved)
+    assert all(d["class"] != "head" and d["rank"] > 0 for _, d in moved)
+    assert any(old["rank"] == 0 for old, _ in moved)
 
 
 def test_same_detections_from_a_numpy_array(detector, grey):

@@ -96,6 +96,10 @@ check "--cascade-min-confidence nan" 1 "cascade-min-confidence" \
   $D in/frame_b.png --cascade-min-confidence nan
 check "--cascade-miss-rate 0.6" 1 "--cascade-miss-rate must lie in \\[0, 0.5\\]" \
   $D in/frame_b.png --cascade-miss-rate 0.6
+check "--tip-radius 0.6" 1 "--tip-radius must lie in \\[0, 0.5\\] metres" \
+  $D in/frame_b.png --tip-radius 0.6
+check "--tip-min-confidence 0" 1 "--tip-min-confidence must lie in \\(0, 1\\]" \
+  $D in/frame_b.png --tip-min-confidence 0
 check "agex_train --cascade-for a fused model with the AGEX-point flags" 1 "--cascade-for in/model.yml: a model of the fused detector, and these flags collect agex examples" \
   $T --dataset in/dataset --out out/cascade.yml --cascade-for in/model.yml
 check "agex_train --cascade-for MODEL --out MODEL (over its own input)" 1 "model.yml: output would overwrite an input file" \

@@ -74,6 +74,7 @@ main (int argc, char **argv)
         agex::InputFiles read (
             agex::apps::datasetFiles (agex::apps::selectDataset (flags.dataset_spec, false).dataset));
         read.add (flags.detector.model);
+        read.add (flags.detector.window_model);
         agex::apps::checkOutputPath (flags.json_path, "agex_bench report", agex::apps::benchReportRecogniser (), read);
       }
       if (!flags.compare_with.empty ())
@@ -91,6 +92,7 @@ main (int argc, char **argv)
       {
         agex::InputFiles read (flags.inputs);
         read.add (flags.detector.model);
+        read.add (flags.detector.window_model);
         agex::apps::checkOutputPath (flags.json_path, "agex_bench report", agex::apps::benchReportRecogniser (), read);
       }
       doc = agex::apps::benchFrames (flags.inputs, flags.frame_options, flags.params, flags.k, flags.repeat,

@@ -2,7 +2,8 @@
 # The table of doc/results.md, "The fused detector against every baseline", for one fold:
 # trains the four depth models of scripts/train_bundled_models.sh (AGEX_BUNDLED_RECIPE=bonn's
 # recipe; AGEX_EVAL_RECIPE=mixed below for today's) on the Bonn sequences that are not TEST, then scores on TEST's keyframes, portrait and full view:
-# AGEX only, the sliding-window baseline, PCL's forest alone, our forest alone, fused, and the
+# AGEX only, the sliding-window baseline, PCL's forest alone, our forest alone, fused (with the
+# fold's sliding window blended in, as the bundled model has it), and the
 # fused model with agex 0.1's crop box in place of person isolation (box: what isolation costs
 # on Bonn, whose people all stand in that box).
 # Writes OUT/ev_<detector>_<view>.json (agex_eval detect reports) and prints the fold's table
@@ -60,6 +61,7 @@ case "$RECIPE_NAME" in
       cp "$OUT/mixed/agex_bonn_forest.agexforest" "$OUT/forest.agexforest"
       cp "$OUT/mixed/agex_bonn_agex.yml" "$OUT/agex.yml"
       cp "$OUT/mixed/agex_bonn_sw.yml" "$OUT/sw.yml"
+      cp "$OUT/mixed/agex_bonn_sw.yml" "$OUT/agex_bonn_sw.yml"  # the window model it names
       cp "$OUT/mixed/agex_bonn.yml" "$OUT/fused.tmp.yml" && mv "$OUT/fused.tmp.yml" "$OUT/fused.yml"
     fi ;;
 esac
@@ -97,7 +99,8 @@ for view in portrait full; do
   score sw --model "$OUT/sw.yml"
   score pcl_forest --model "$OUT/agex.yml" --detector-mode forest --forest "$PCL_FORESTS"
   score our_forest --model "$OUT/agex.yml" --detector-mode forest --forest "$OUT/forest.agexforest"
-  score fused --model "$OUT/fused.yml"
-  score box --model "$OUT/box.yml"
+  # The fused detector with the fold's own sliding window blended in, as the bundled one has it.
+  score fused --model "$OUT/fused.yml" --window-model "$OUT/sw.yml"
+  score box --model "$OUT/box.yml" --window-model "$OUT/sw.yml"
 done
 python3 "$ROOT/scripts/bonn_table.py" "$OUT"

@@ -111,9 +111,17 @@ def main():
                                off_model, 'spur_iterations=0'], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
         if made.returncode != 0:
             sys.exit(f'part_widths: {args.model}: cannot turn its spur erosion off: {made.stderr.strip()}')
+        # The copy finds the forest and the window model it names beside itself.
         for f in os.listdir(os.path.dirname(os.path.abspath(args.model))):
             if f.endswith('.agexforest'):
                 shutil.copy(os.path.join(os.path.dirname(os.path.abspath(args.model)), f), tmp)
+        window = agex.BodyPartDetector(model=args.model).window_model
+        if window:
+            relative = os.path.relpath(window, os.path.dirname(os.path.abspath(args.model)))
+            if relative.startswith('..'):
+                sys.exit(f'part_widths: {args.model} names its window model outside its folder ({window})')
+            os.makedirs(os.path.dirname(os.path.join(tmp, relative)) or tmp, exist_ok=True)
+            shutil.copy(window, os.path.join(tmp, relative))
         on, off = agex.BodyPartDetector(model=args.model), agex.BodyPartDetector(model=off_model)
         widths, near = {}, {}
         seen = 0

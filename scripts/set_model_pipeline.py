@@ -6,8 +6,8 @@
 
 To score one trained model under other pipeline settings (agex_eval detect runs the pipeline a
 model stores; doc/pipeline.md lists the keys and their ranges, which the detector checks when it
-loads the copy). The classifier is untouched; a fused model's forest is looked up beside the
-copy, so write the copy next to the forest or copy the forest beside it. Refuses to write over
+loads the copy). The classifier is untouched; a fused model's forest and window model are looked
+up beside the copy, so write the copy next to them or copy them beside it. Refuses to write over
 an existing file.
 """
 import json

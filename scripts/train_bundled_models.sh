@@ -15,7 +15,10 @@
 #     agex_bonn.yml was trained before the cascade and had its cascade fitted afterwards by
 #     `agex_train --cascade-for` with its own training command (100 s); a retrain from here
 #     gives a model with its cascade built in, though not bit for bit the bundled one (the part
-#     modes changed since, and with them the forest candidates it trains on);
+#     modes changed since, and with them the forest candidates it trains on). It names the
+#     sliding-window model beside it (agex_train --window-model agex_bonn_sw.yml
+#     --window-weight 0.3): the bundled file was given those two keys of its metadata after
+#     training, which is all the flags change (the classifier does not depend on them);
 #   bonn: the earlier recipe, both views of the 8 Bonn sequences as recorded; about half an
 #     hour on 2 cores.
 # Usage: scripts/train_bundled_models.sh [BUILD_DIR] [WORK_DIR]
@@ -53,6 +56,7 @@ for group in 1,2 3,4 5,6 7,8; do
     fold_args+=(--dataset "$WORK/bonn-$view@$group" --dataset-forest "$WORK/bonn-$view@$group=$WORK/forest_without_${group//,/}.agexforest")
   done
 done
-"$BIN/agex_train" --fused --forest "$MODELS/agex_bonn_forest.agexforest" "${fold_args[@]}" "${RECIPE[@]}" --out "$MODELS/agex_bonn.yml"
+"$BIN/agex_train" --fused --forest "$MODELS/agex_bonn_forest.agexforest" "${fold_args[@]}" "${RECIPE[@]}" \
+  --window-model "$MODELS/agex_bonn_sw.yml" --window-weight 0.3 --out "$MODELS/agex_bonn.yml"
 "$BIN/agex_train" $(both $ALL) "${RECIPE[@]}" --out "$MODELS/agex_bonn_agex.yml"
 "$BIN/agex_train" --sliding-window $(both $ALL) --weak-count 300 --fragments 150 --out "$MODELS/agex_bonn_sw.yml"

@@ -13,7 +13,8 @@
 # (Bonn sequence pairs with their re-projected copies, and a quarter of the synthetic sets
 # each): every group's frames are labelled by a forest trained without them.
 # Usage: scripts/train_mixed_models.sh OUT_DIR [BUILD_DIR] [WORK_DIR]
-# Writes OUT_DIR/agex_bonn.yml (fused, naming agex_bonn_forest.agexforest beside it),
+# Writes OUT_DIR/agex_bonn.yml (fused, naming agex_bonn_forest.agexforest beside it, and
+# agex_bonn_sw.yml when the sliding window is trained too or already there),
 # agex_bonn_agex.yml and agex_bonn_sw.yml. Stages are checkpoints: a rerun with the same
 # WORK_DIR skips the datasets and forests already there. AGEX_TRAIN_SCALE (0.05-1, default 1)
 # renders that fraction of the synthetic frames and moves only the keyframes: a quick trial
@@ -164,13 +165,19 @@ done
 # Only with the fused detector: a fused model already there keeps the forest it was trained on.
 [[ "$seen" == *" fused "* ]] && cp "$WORK/forest$TAG.agexforest" "$MODELS/agex_bonn_forest.agexforest"
 RECIPE=(--k 16 --weak-count 200 --fragments 100 --random-negatives 3 --working-spacing "$SPACING")
+# The fused model names the sliding-window model beside it, trained now or before, whose
+# confidences it blends into its candidates' (doc/results.md: every class gains on held-out data).
+WINDOW=()
+if [[ "$seen" == *" sw "* ]] || [ -f "$MODELS/agex_bonn_sw.yml" ]; then
+  WINDOW=(--window-model "$MODELS/agex_bonn_sw.yml" --window-weight 0.3)
+fi
 # agex_train uses one core: the detectors train side by side.
 stamp "detectors: ${DETECTOR_LIST[*]}"
 jobs_started=()
 for d in "${DETECTOR_LIST[@]}"; do
   case "$d" in
   fused) "$BIN/agex_train" --fused --forest "$MODELS/agex_bonn_forest.agexforest" "${fold_args[@]}" "${RECIPE[@]}" \
-           --background-ratio "$RATIO" --out "$MODELS/agex_bonn.yml" > "$WORK/fused$TAG.log" 2>&1 & ;;
+           "${WINDOW[@]}" --background-ratio "$RATIO" --out "$MODELS/agex_bonn.yml" > "$WORK/fused$TAG.log" 2>&1 & ;;
   agex) "$BIN/agex_train" $(all_args) "${RECIPE[@]}" --background-ratio "$RATIO" --out "$MODELS/agex_bonn_agex.yml" \
           > "$WORK/agex$TAG.log" 2>&1 & ;;
   sw) "$BIN/agex_train" --sliding-window $(all_args) --weak-count 300 --fragments 150 --working-spacing "$SPACING" \

@@ -54,6 +54,11 @@ DetectorSettings::validate (const std::function<std::string (const std::string &
     if (forest_stride < 0 || forest_stride > 8)
       throw std::invalid_argument (name ("fused.forest_stride") + " is " + std::to_string (forest_stride) +
                                    ", outside [0, 8] (0: by the focal length)");
+    if (window_file.size () > 4096)
+      throw std::invalid_argument (name ("fused.window") + " is longer than 4096 characters");
+    if (!(window_weight >= 0.f && window_weight <= 1.f))
+      throw std::invalid_argument (name ("fused.window_weight") + " is " + formatNumber (window_weight) +
+                                   ", outside [0, 1]");
   }
   if (kind == DetectorKind::SlidingWindow)
   {
@@ -88,6 +93,11 @@ DetectorSettings::toJson () const
                     {"forest", forest_file},
                     {"forest_bytes", forest_bytes},
                     {"forest_stride", forest_stride}};
+  if (kind == DetectorKind::Fused && !window_file.empty ())
+  {
+    doc["fused"]["window"] = window_file;
+    doc["fused"]["window_weight"] = window_weight;
+  }
   return doc;
 }
 
@@ -171,6 +181,14 @@ DetectorSettings::fromJson (const nlohmann::json &doc, const std::string &source
     if (!f.contains ("forest") || !f["forest"].is_string ())
       throw std::invalid_argument (name ("fused.forest") + " is missing or not a file name");
     s.forest_file = f["forest"].get<std::string> ();
+    // Models written before the window rescoring name no sliding-window model.
+    if (f.contains ("window"))
+    {
+      if (!f["window"].is_string ())
+        throw std::invalid_argument (name ("fused.window") + " is not a file name");
+      s.window_file = f["window"].get<std::string> ();
+      s.window_weight = static_cast<float> (number ("window_weight", -1e6, 1e6));
+    }
   }
   s.validate (name);
   return s;
@@ -219,6 +237,13 @@ DetectorModel::load (const std::string &path)
     const std::filesystem::path forest (model.settings_.forest_file);
     model.forest_path_ =
         (forest.is_absolute () ? forest : std::filesystem::path (path).parent_path () / forest).lexically_normal ().string ();
+    if (!model.settings_.window_file.empty ())
+    {
+      const std::filesystem::path window (model.settings_.window_file);
+      model.window_path_ = (window.is_absolute () ? window : std::filesystem::path (path).parent_path () / window)
+                               .lexically_normal ()
+                               .string ();
+    }
     if (classifier->auxiliaryNames () != fusedFeatureNames ())
       throw ModelError (path + ": a fused model whose classifier does not take this build's forest features");
   }
@@ -236,16 +261,46 @@ DetectorModel::save (const std::string &path, const nlohmann::json &training) co
   classifier_->save (path, metadata);
 }
 
+DetectorModel::ConstPtr
+loadWindowModel (const std::string &path, const DetectorModel &fused, const std::string &named_by)
+{
+  const std::string named =
+      named_by.empty () ? std::string ()
+                        : " (the window model " + named_by + " names: keep it beside it, or give a window weight of 0)";
+  DetectorModel::ConstPtr window;
+  try
+  {
+    window = std::make_shared<const DetectorModel> (DetectorModel::load (path));
+  }
+  catch (const ModelError &e)
+  {
+    if (named.empty ())
+      throw;
+    throw ModelError (e.what () + named);
+  }
+  window->requireKind (DetectorKind::SlidingWindow, path + named);
+  if (window->classifier ().classes () != fused.classifier ().classes ())
+    throw std::invalid_argument (path + named + " names " + std::to_string (window->classifier ().classes ()) +
+                                 " classes, the fused model " + std::to_string (fused.classifier ().classes ()));
+  if (!window->classifier ().auxiliaryNames ().empty ())
+    throw std::invalid_argument (path + named + ": its classifier takes auxiliary features, which a sliding-window "
+                                 "model's never does");
+  return window;
+}
+
 void
 DetectorModel::requireKind (DetectorKind expected, const std::string &path) const
 {
   auto described = [] (DetectorKind kind) {
-    return std::string (kind == DetectorKind::Agex ? "an AGEX model" : "a sliding-window model");
+    return std::string (kind == DetectorKind::Agex    ? "an AGEX model"
+                        : kind == DetectorKind::Fused ? "a fused model"
+                                                      : "a sliding-window model");
   };
   if (settings_.kind != expected)
     throw std::invalid_argument (path + " is " + described (settings_.kind) + ", but " + described (expected) +
                                  " is needed here" +
-                                 (expected == DetectorKind::Agex ? " (train one with agex_train without --sliding-window)"
-                                                                 : " (train one with agex_train --sliding-window)"));
+                                 (expected == DetectorKind::Agex    ? " (train one with agex_train without --sliding-window)"
+                                  : expected == DetectorKind::Fused ? " (train one with agex_train --fused)"
+                                                                    : " (train one with agex_train --sliding-window)"));
 }
 }  // namespace agex

@@ -392,7 +392,7 @@ class PyDetector
 public:
   PyDetector (std::optional<std::string> model, std::optional<std::string> forest, std::optional<std::string> mode,
               int forest_stride, float cascade_min_confidence, float cascade_miss_rate, float tip_radius,
-              float tip_min_confidence)
+              float tip_min_confidence, std::optional<std::string> window_model, std::optional<float> window_weight)
   {
     const std::string model_path = model ? checkedPath ("model", *model) : bundledDataFile ("models/agex_bonn.yml");
     if (forest)
@@ -415,6 +415,10 @@ public:
     tip_refinement_.validate ([] (const std::string &key) {
       return std::string (key == "radius" ? "tip_radius" : "tip_min_confidence");
     });
+    // Checked while the GIL is held: a bad path's message is built from Python objects.
+    const std::string window_model_path = window_model ? checkedPath ("window_model", *window_model) : std::string ();
+    if (window_weight && !(*window_weight >= 0.f && *window_weight <= 1.f))
+      throw std::invalid_argument ("window_weight must lie in [0, 1] (0: off)");
     py::gil_scoped_release release;
     model_ = std::make_shared<const agex::DetectorModel> (agex::DetectorModel::load (model_path));
     model_path_ = model_path;
@@ -426,6 +430,26 @@ public:
     if (!forest_path.empty ())
       forest_ = agex::BodyPartForest::load (forest_path);
     forest_path_ = forest_path;
+    // As agex_detect's --window-model and --window-weight: a fused model's own by default.
+    const bool fused = model_->settings ().kind == agex::DetectorKind::Fused && mode_ == agex::DetectorMode::Model;
+    if (window_model && !fused)
+      throw std::invalid_argument ("window_model rescores a fused model's candidates; " + model_path +
+                                   " is not run as a fused model");
+    const std::string window = window_model ? window_model_path
+                               : fused      ? model_->windowPath ()
+                                            : std::string ();
+    if (window.empty () && window_weight && *window_weight > 0.f)
+      throw std::invalid_argument ("window_weight needs a window model: " + model_path +
+                                   (fused ? " names none (give window_model)" : " is not run as a fused model"));
+    const float weight = window_weight                          ? *window_weight
+                         : !window_model && !window.empty () ? model_->settings ().window_weight
+                                                               : agex::BodyPartDetector<pcl::PointXYZ>::kDefaultWindowWeight;
+    if (!window.empty () && weight > 0.f)
+    {
+      window_model_ = agex::loadWindowModel (window, *model_, window_model ? std::string () : model_path);
+      window_weight_ = weight;
+      window_path_ = window;
+    }
   }
 
   /** Detections of one frame; the intermediate results are kept for intermediate (). */
@@ -446,6 +470,7 @@ public:
       detector->setCascadeMinConfidence (cascade_min_confidence_);
       detector->setCascadeMissRate (cascade_miss_rate_);
       detector->setTipRefinement (tip_refinement_);
+      detector->setWindowRescoring (window_model_, window_weight_);
       // A PCD carries no intrinsics: the detector estimates them (0), whatever the last frame had.
       if (frame->has_intrinsics ())
         detector->setFocalLength (static_cast<float> (frame->frame.intrinsics.fx),
@@ -499,6 +524,8 @@ public:
 
   const std::string &modelPath () const { return model_path_; }
   const std::string &forestPath () const { return forest_path_; }
+  const std::string &windowPath () const { return window_path_; }
+  float windowWeight () const { return window_model_ ? window_weight_ : 0.f; }
   std::string mode () const { return agex::detectorModeName (mode_); }
   std::string kind () const { return agex::detectorKindName (model_->settings ().kind); }
 
@@ -580,7 +607,9 @@ private:
   float cascade_min_confidence_ = agex::BodyPartDetector<pcl::PointXYZ>::kDefaultCascadeMinConfidence;
   float cascade_miss_rate_ = agex::BodyPartDetector<pcl::PointXYZ>::kDefaultCascadeMissRate;
   agex::TipRefinementParams tip_refinement_;
-  std::string model_path_, forest_path_;
+  agex::DetectorModel::ConstPtr window_model_;
+  float window_weight_ = 0.f;
+  std::string model_path_, forest_path_, window_path_;
   mutable std::mutex mutex_;
   std::shared_ptr<agex::BodyPartDetector<pcl::PointXYZ>> last_;
   // Detectors of earlier calls, at most one per call that ran at the same time as others.
@@ -704,19 +733,22 @@ PYBIND11_MODULE (_agex, m)
 
   py::class_<PyDetector> (m, "BodyPartDetector", "Heads, hands and feet: agex::BodyPartDetector")
     .def (py::init<std::optional<std::string>, std::optional<std::string>, std::optional<std::string>, int, float,
-                   float, float, float> (),
+                   float, float, float, std::optional<std::string>, std::optional<float>> (),
           py::arg ("model") = py::none (), py::arg ("forest") = py::none (), py::arg ("mode") = py::none (),
           py::arg ("forest_stride") = 1,
           py::arg ("cascade_min_confidence") = agex::BodyPartDetector<pcl::PointXYZ>::kDefaultCascadeMinConfidence,
           py::arg ("cascade_miss_rate") = agex::BodyPartDetector<pcl::PointXYZ>::kDefaultCascadeMissRate,
           py::arg ("tip_radius") = agex::TipRefinementParams ().radius,
           py::arg ("tip_min_confidence") = agex::TipRefinementParams ().min_relative_confidence,
+          py::arg ("window_model") = py::none (), py::arg ("window_weight") = py::none (),
           "model: a model file (default: the bundled agex_bonn.yml); forest: a body-part forest (an agex forest file, "
           "a PCL tree file or a directory of them); mode: 'model' (default) or 'forest' (the forest's part modes "
           "alone); forest_stride: one evaluated pixel per stride x stride cell; cascade_min_confidence, "
           "cascade_miss_rate: the classifier's soft cascade, as agex_detect's flags (0: every candidate in full); "
           "tip_radius, tip_min_confidence: fused hands and feet moved to their part's extremity, as agex_detect's "
-          "--tip-radius and --tip-min-confidence (0: off)")
+          "--tip-radius and --tip-min-confidence (0: off); window_model, window_weight: a sliding-window model's "
+          "confidences blended into a fused model's candidates, as --window-model and --window-weight (default: the "
+          "fused model's own; weight 0: off)")
     .def ("detect", &PyDetector::detect, py::arg ("depth"), py::arg ("fx") = py::none (), py::arg ("fy") = py::none (),
           py::arg ("cx") = py::none (), py::arg ("cy") = py::none (), py::arg ("depth_scale") = py::none (),
           py::kw_only (), py::arg ("return_intermediate") = false,
@@ -727,6 +759,8 @@ PYBIND11_MODULE (_agex, m)
           "part_probabilities, interest_points, part_modes, floor_plane, ms")
     .def_property_readonly ("model", &PyDetector::modelPath)
     .def_property_readonly ("forest", &PyDetector::forestPath)
+    .def_property_readonly ("window_model", &PyDetector::windowPath)
+    .def_property_readonly ("window_weight", &PyDetector::windowWeight)
     .def_property_readonly ("mode", &PyDetector::mode)
     .def_property_readonly ("kind", &PyDetector::kind, "the model's detector kind: agex, sliding_window or fused");
 

@@ -429,6 +429,52 @@ TEST (FrameJobs, BatchSkipsDoneFramesAndKeepsWhatWasDoneAfterAFailure)
   EXPECT_EQ (std::count (written.begin (), written.end (), '\n'), 5);
 }
 
+// The detector flags' window model: a fused model brings the one it names with its weight,
+// --window-model replaces it (weight 0.3 unless given), --window-weight 0 turns it off, and a
+// weight without any window model is refused. The forest stays the forest in the reports.
+TEST (DetectorFlags, AFusedModelBringsItsWindowModelUnlessTurnedOff)
+{
+  namespace fs = std::filesystem;
+  const std::string models = AGEX_SOURCE_DIR "/data/models/";
+  const auto same = [] (const std::string &a, const std::string &b) {
+    return fs::weakly_canonical (a) == fs::weakly_canonical (b);
+  };
+  agex::apps::DetectorChoice choice;
+  choice.model = models + "agex_bonn.yml";
+  agex::apps::LoadedDetector own = agex::apps::loadDetector (choice, agex::DetectorKind::Fused);
+  ASSERT_TRUE (own.window_model);
+  EXPECT_TRUE (same (own.window_file, models + "agex_bonn_sw.yml")) << own.window_file;
+  EXPECT_FLOAT_EQ (own.window_weight, own.model->settings ().window_weight);
+  EXPECT_TRUE (same (own.forest_file, models + "agex_bonn_forest.agexforest")) << own.forest_file;
+  EXPECT_EQ (own.files.size (), 3u);
+  agex::BodyPartDetector<pcl::PointXYZ> detector;
+  own.configure (detector);
+  EXPECT_EQ (detector.getWindowModel (), own.window_model);
+  EXPECT_FLOAT_EQ (detector.getWindowWeight (), own.window_weight);
+
+  choice.window_weight = 0.f;
+  const agex::apps::LoadedDetector off = agex::apps::loadDetector (choice, agex::DetectorKind::Fused);
+  EXPECT_FALSE (off.window_model);
+  EXPECT_TRUE (off.window_file.empty ());
+  EXPECT_EQ (off.files.size (), 2u);
+
+  choice.window_weight = -1.f;  // not given
+  choice.window_model = models + "agex_bonn_sw.yml";
+  const agex::apps::LoadedDetector given = agex::apps::loadDetector (choice, agex::DetectorKind::Fused);
+  ASSERT_TRUE (given.window_model);
+  EXPECT_EQ (given.window_file, choice.window_model);
+  EXPECT_FLOAT_EQ (given.window_weight, agex::BodyPartDetector<pcl::PointXYZ>::kDefaultWindowWeight);
+
+  choice.window_model = models + "agex_bonn_agex.yml";
+  EXPECT_THROW (agex::apps::loadDetector (choice, agex::DetectorKind::Fused), std::invalid_argument);
+  agex::apps::DetectorChoice agex_only;
+  agex_only.model = models + "agex_bonn_agex.yml";
+  agex_only.window_weight = 0.5f;
+  EXPECT_THROW (agex::apps::loadDetector (agex_only), std::runtime_error);
+  agex_only.window_weight = -1.f;
+  EXPECT_FALSE (agex::apps::loadDetector (agex_only).window_model);
+}
+
 // agex_detect's detectors: one per thread at work, kept from frame to frame. A frame through a
 // detector that has seen others gives what a new detector gives, also when a PCD (no
 // intrinsics: focal lengths estimated) follows a depth image (intrinsics given).

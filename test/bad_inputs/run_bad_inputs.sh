@@ -15,6 +15,8 @@ cp "$SRC"/test/bad_inputs/inputs/* in/
 cp "$SRC/data/frames/bonn_1_002.png" in/frame.png
 cp "$SRC/data/models/agex_bonn.yml" in/model.yml
 cp "$SRC/data/models/agex_bonn_forest.agexforest" in/  # the fused model's forest, named relative to it
+cp "$SRC/data/models/agex_bonn_sw.yml" in/  # and its window model
+cp "$SRC/data/models/agex_bonn_agex.yml" in/agex_model.yml
 head -c 20000 in/frame.png > in/truncated.png
 : > in/empty.png
 head -c 1000 /dev/zero > in/wrong_size.u16

@@ -56,7 +56,8 @@ endif()
 get_filename_component(config_dir "${config}" DIRECTORY)
 foreach(file include/agex/keypoints/agex_keypoint.h include/agex/keypoints/impl/agex_keypoint.hpp
              include/agex/io/frame_io.h bin/agex_detect share/agex/models/agex_bonn.yml
-             share/agex/models/agex_bonn_agex.yml share/agex/models/agex_bonn_forest.agexforest)
+             share/agex/models/agex_bonn_agex.yml share/agex/models/agex_bonn_forest.agexforest
+             share/agex/models/agex_bonn_sw.yml)
   if(NOT EXISTS ${prefix}/${file})
     message(FATAL_ERROR "${file} was not installed")
   endif()

@@ -275,7 +275,175 @@ TEST (FusedDetector, AModelTrainedAtOneResolutionScoresAtAnother)
     EXPECT_GT (confidence, 0.5f);
   }
 }
+
+/** A sliding-window model trained on the same scenes as trainFused (upright patches). */
+agex::DetectorModel::ConstPtr
+trainWindows (const Camera &cam)
+{
+  agex::DetectorSettings settings = fusedSettings ();
+  settings.kind = agex::DetectorKind::SlidingWindow;
+  settings.forest_file.clear ();
+  const agex::PatchGeometry geometry{21, 0.5f, 0.3f};
+  std::mt19937 rng (9);
+  std::mt19937_64 sample_rng (9);
+  std::uniform_real_distribution<double> along (-0.08, 0.08);
+  std::vector<agex::DepthPatch> patches;
+  std::vector<int> classes;
+  for (int i = 0; i < 12; ++i)
+  {
+    const Scene scene = makeScene (cam, along (rng), 0.05 + along (rng), along (rng));
+    const agex::DepthPipelineResult prepared = agex::runDepthPipeline (scene.cloud, settings.pipeline);
+    agex::collectWindowTrainingSamples (prepared, scene.labels, 0.1f, 2, 0.03f, 20, geometry, sample_rng, patches,
+                                        classes);
+  }
+  auto classifier = std::make_shared<agex::PatchClassifier> ();
+  agex::PatchClassifierParams params;
+  params.weak_count = 30;
+  params.dictionary.fragments_per_class = 10;
+  classifier->train (patches, classes, agex::kBodyPartCount, params);
+  classifier->setPatchGeometry (geometry);
+  return std::make_shared<const agex::DetectorModel> (classifier, settings);
+}
 }  // namespace
+
+// The sliding window's confidences blend into each fused candidate's: weight 0 changes
+// nothing, weight 1 leaves each detection exactly the window classifier's confidence for its
+// class on the upright patch at its pixel, and only sliding-window models and weights in
+// [0, 1] are accepted.
+TEST (FusedDetector, WindowRescoringBlendsTheSlidingWindowsConfidenceAtEachCandidate)
+{
+  const Camera cam{262.5, 262.5, 159.5, 119.5, 320, 240};
+  const auto forest = handByDepthForest ();
+  const auto model = trainFused (cam, forest);
+  const auto windows = trainWindows (cam);
+  const Scene scene = makeScene (cam, 0.03, 0.04, 0.01);
+  const auto run = [&] (const agex::DetectorModel::ConstPtr &window_model, float weight,
+                        agex::DepthPipelineResult *intermediate) {
+    agex::BodyPartDetector<pcl::PointXYZ> detector;
+    detector.setModel (model);
+    detector.setForest (forest);
+    detector.setWindowRescoring (window_model, weight);
+    detector.setFocalLength (static_cast<float> (cam.fx), static_cast<float> (cam.fy));
+    detector.setInputCloud (scene.cloud);
+    std::vector<agex::BodyPartDetection> detections;
+    detector.compute (detections);
+    if (intermediate)
+      *intermediate = detector.getIntermediate ();
+    return detections;
+  };
+  const auto plain = run (nullptr, 0.f, nullptr);
+  const auto zero = run (windows, 0.f, nullptr);
+  ASSERT_FALSE (plain.empty ());
+  ASSERT_EQ (zero.size (), plain.size ());
+  for (std::size_t i = 0; i < plain.size (); ++i)
+  {
+    EXPECT_EQ (zero[i].part, plain[i].part);
+    EXPECT_EQ (bits (zero[i].confidence), bits (plain[i].confidence)) << i;
+  }
+
+  agex::DepthPipelineResult prepared;
+  const auto window_only = run (windows, 1.f, &prepared);
+  ASSERT_FALSE (window_only.empty ());
+  ASSERT_TRUE (prepared.filtered);
+  const int width = static_cast<int> (prepared.filtered->width);
+  bool changed = false;
+  for (const auto &d : window_only)
+  {
+    pcl::PointCloud<agex::InterestPoint> at;
+    agex::InterestPoint p;
+    p.getVector3fMap () = (*prepared.filtered)[d.v * width + d.u].getVector3fMap ();
+    p.orientation[0] = p.orientation[1] = p.orientation[2] = 0.f;
+    p.u = d.u;
+    p.v = d.v;
+    at.push_back (p);
+    std::vector<agex::DepthPatch> patch;
+    agex::computePatches (prepared, at, windows->patchGeometry (), patch);
+    ASSERT_EQ (patch.size (), 1u);
+    std::vector<float> margins (agex::kBodyPartCount), confidences (agex::kBodyPartCount);
+    windows->classifier ().classify (patch[0], margins.data (), confidences.data ());
+    EXPECT_FLOAT_EQ (d.confidence, confidences[static_cast<std::size_t> (d.part)]) << d.u << "," << d.v;
+    EXPECT_EQ (static_cast<int> (std::max_element (confidences.begin (), confidences.end ()) - confidences.begin ()),
+               static_cast<int> (d.part));
+    for (const auto &q : plain)
+      changed = changed || (q.u == d.u && q.v == d.v && bits (q.confidence) != bits (d.confidence));
+  }
+  EXPECT_TRUE (changed) << "the window classifier gave every candidate the fused classifier's confidence";
+
+  agex::BodyPartDetector<pcl::PointXYZ> detector;
+  EXPECT_THROW (detector.setWindowRescoring (windows, 1.5f), std::invalid_argument);
+  EXPECT_THROW (detector.setWindowRescoring (windows, -0.1f), std::invalid_argument);
+  EXPECT_THROW (detector.setWindowRescoring (windows, std::numeric_limits<float>::quiet_NaN ()),
+                std::invalid_argument);
+  EXPECT_THROW (detector.setWindowRescoring (model, 0.5f), std::invalid_argument);
+  detector.setWindowRescoring (windows, 0.5f);
+  EXPECT_EQ (detector.getWindowModel (), windows);
+  EXPECT_FLOAT_EQ (detector.getWindowWeight (), 0.5f);
+}
+
+// A fused model names its sliding-window model relative to itself, with the weight: fromModel
+// loads it and scores as setWindowRescoring does; a missing or wrong window model is an error
+// naming it; models without the keys name none.
+TEST (FusedDetector, AModelNamesItsWindowModelWhichFromModelLoads)
+{
+  const Camera cam{262.5, 262.5, 159.5, 119.5, 320, 240};
+  const auto forest = handByDepthForest ();
+  const auto model = trainFused (cam, forest);
+  const auto windows = trainWindows (cam);
+  TempDir dir;
+  forest->save (dir.file ("forest.agexforest"));
+  windows->save (dir.file ("windows.yml"));
+  agex::DetectorSettings settings = model->settings ();
+  settings.forest_bytes = fs::file_size (dir.file ("forest.agexforest"));
+  agex::DetectorModel (model->classifierPtr (), settings).save (dir.file ("plain.yml"));
+  settings.window_file = "windows.yml";
+  settings.window_weight = 0.4f;
+  agex::DetectorModel (model->classifierPtr (), settings).save (dir.file ("fused.yml"));
+
+  EXPECT_TRUE (agex::DetectorModel::load (dir.file ("plain.yml")).windowPath ().empty ());
+  const agex::DetectorModel loaded_model = agex::DetectorModel::load (dir.file ("fused.yml"));
+  EXPECT_EQ (fs::path (loaded_model.windowPath ()), fs::path (dir.file ("windows.yml")));
+  EXPECT_FLOAT_EQ (loaded_model.settings ().window_weight, 0.4f);
+  const auto loaded = agex::BodyPartDetector<pcl::PointXYZ>::fromModel (dir.file ("fused.yml"));
+  ASSERT_TRUE (loaded->getWindowModel ()) << "fromModel did not load the model's window model";
+  EXPECT_FLOAT_EQ (loaded->getWindowWeight (), 0.4f);
+  EXPECT_FALSE (agex::BodyPartDetector<pcl::PointXYZ>::fromModel (dir.file ("plain.yml"))->getWindowModel ());
+
+  const Scene scene = makeScene (cam, -0.02, 0.05, 0.02);
+  agex::BodyPartDetector<pcl::PointXYZ> direct;
+  direct.setModel (model);
+  direct.setForest (forest);
+  direct.setWindowRescoring (windows, 0.4f);
+  std::vector<agex::BodyPartDetection> a, b;
+  for (auto *detector : {&direct, loaded.get ()})
+  {
+    detector->setFocalLength (static_cast<float> (cam.fx), static_cast<float> (cam.fy));
+    detector->setInputCloud (scene.cloud);
+    detector->compute (detector == &direct ? a : b);
+  }
+  ASSERT_FALSE (a.empty ());
+  ASSERT_EQ (a.size (), b.size ());
+  for (std::size_t i = 0; i < a.size (); ++i)
+  {
+    EXPECT_EQ (a[i].part, b[i].part);
+    EXPECT_EQ (bits (a[i].confidence), bits (b[i].confidence)) << i;
+  }
+
+  // The window model must be there, and be a sliding-window model.
+  fs::rename (dir.file ("windows.yml"), dir.file ("moved.yml"));
+  try
+  {
+    agex::BodyPartDetector<pcl::PointXYZ>::fromModel (dir.file ("fused.yml"));
+    ADD_FAILURE () << "a missing window model was not an error";
+  }
+  catch (const agex::ModelError &e)
+  {
+    EXPECT_NE (std::string (e.what ()).find ("windows.yml"), std::string::npos) << e.what ();
+  }
+  fs::copy_file (dir.file ("plain.yml"), dir.file ("windows.yml"));
+  EXPECT_THROW (agex::BodyPartDetector<pcl::PointXYZ>::fromModel (dir.file ("fused.yml")), agex::ModelError);
+  settings.window_weight = 1.5f;
+  EXPECT_THROW (agex::DetectorModel (model->classifierPtr (), settings), std::invalid_argument);
+}
 
 TEST (TrainingExamples, BackgroundThinnedToTheRatioKeepingEveryPositiveInOrder)
 {

@@ -88,8 +88,10 @@ def test_the_cascade_off_keeps_every_candidate_and_the_confident_detections(dete
 
 def test_the_tip_refinement_moves_hands_and_feet_only_and_keeps_their_confidences(detector):
     frame = agex.load_frame(FRAME)
-    before = detector.detect(frame)
-    after = agex.BodyPartDetector(tip_radius=0.1).detect(frame)
+    # The fused classifier's own confidences (on this frame the window's view leaves no hand or
+    # foot at an ankle or wrist to move).
+    before = agex.BodyPartDetector(window_weight=0).detect(frame)
+    after = agex.BodyPartDetector(tip_radius=0.1, window_weight=0).detect(frame)
     # Each class keeps its most confident detection's confidence; heads stay where they were.
     for part in ("head", "hand", "foot"):
         assert max(d["confidence"] for d in after if d["class"] == part) == \
@@ -103,6 +105,34 @@ def test_the_tip_refinement_moves_hands_and_feet_only_and_keeps_their_confidence
     assert moved
     assert all(d["class"] != "head" and d["rank"] > 0 for _, d in moved)
     assert any(old["rank"] == 0 for old, _ in moved)
+
+
+def test_the_bundled_fused_model_blends_in_its_sliding_window_and_weight_zero_turns_it_off():
+    frame = agex.load_frame(FRAME)
+    bundled = agex.BodyPartDetector()
+    assert bundled.window_model == agex.bundled_data_file("models/agex_bonn_sw.yml")
+    blended = bundled.detect(frame)
+    plain_detector = agex.BodyPartDetector(window_weight=0)
+    assert plain_detector.window_model == ""
+    plain = plain_detector.detect(frame)
+    assert blended and plain
+    # The same candidates, other confidences: the window's view moves each of them.
+    assert sorted(d["confidence"] for d in blended) != sorted(d["confidence"] for d in plain)
+    # Given explicitly with the bundled model's weight: the bundled detector exactly.
+    explicit = agex.BodyPartDetector(window_model=agex.bundled_data_file("models/agex_bonn_sw.yml"),
+                                     window_weight=0.3)
+    assert explicit.detect(frame) == blended
+    with pytest.raises(ValueError, match="window_weight"):
+        agex.BodyPartDetector(window_weight=1.5)
+    with pytest.raises(ValueError, match="window_model rescores a fused model"):
+        agex.BodyPartDetector(model=agex.bundled_data_file("models/agex_bonn_agex.yml"),
+                              window_model=agex.bundled_data_file("models/agex_bonn_sw.yml"))
+    with pytest.raises(ValueError, match="a sliding-window model is needed here"):
+        agex.BodyPartDetector(window_model=agex.bundled_data_file("models/agex_bonn_agex.yml"))
+    with pytest.raises(ValueError, match="window_model"):
+        agex.BodyPartDetector(window_model="x\0y")
+    assert agex.BodyPartDetector().window_weight == pytest.approx(0.3)
+    assert agex.BodyPartDetector(window_weight=0).window_weight == 0
 
 
 def test_same_detections_from_a_numpy_array(detector, grey):

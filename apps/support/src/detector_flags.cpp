@@ -59,6 +59,16 @@ detectorOptionsDescription (DetectorChoice &choice, const std::string &model_def
            throw std::runtime_error ("--tip-min-confidence must lie in (0, 1]");
        }),
      "the extremity's confidence for the detection's class, as a fraction of the detection's, at least this")
+    ("window-model", po::value (&choice.window_model),
+     "fused models: a sliding-window model (agex_train --sliding-window) whose confidences at each candidate's "
+     "pixel blend into the fused classifier's (default: the one the fused model names, if any)")
+    ("window-weight",
+     po::value (&choice.window_weight)->notifier ([] (float v) {
+       if (!(v >= 0.f && v <= 1.f))
+         throw std::runtime_error ("--window-weight must lie in [0, 1]");
+     }),
+     "fused models with a window model: each class's confidence is (1 - w) fused + w window (0: off; default: "
+     "the weight the fused model names, else 0.3)")
     ("forest-input", po::value (&choice.forest_input)->default_value (choice.forest_input)->notifier ([] (const std::string &v) {
        ForestInput input;
        if (!parseForestInput (v, input))
@@ -86,6 +96,7 @@ LoadedDetector::configure (BodyPartDetector<pcl::PointXYZ> &detector) const
   detector.setCascadeMinConfidence (cascade_min_confidence);
   detector.setCascadeMissRate (cascade_miss_rate);
   detector.setTipRefinement (tip_refinement);
+  detector.setWindowRescoring (window_model, window_weight);
   detector.setForestParts (forest_parts);
 }
 
@@ -112,6 +123,7 @@ loadDetector (const DetectorChoice &choice, DetectorKind kind)
   {
     loaded.forest = BodyPartForest::load (forest);
     loaded.files.push_back (forest);
+    loaded.forest_file = forest;
     std::error_code ec;
     if (model_kind == DetectorKind::Fused && !choice.forest.empty () && choice.mode != "forest" &&
         (!std::filesystem::is_regular_file (forest, ec) ||
@@ -123,6 +135,26 @@ loadDetector (const DetectorChoice &choice, DetectorKind kind)
   loaded.cascade_min_confidence = choice.cascade_min_confidence;
   loaded.cascade_miss_rate = choice.cascade_miss_rate;
   loaded.tip_refinement = choice.tip_refinement;
+  const bool run_fused = model_kind == DetectorKind::Fused && loaded.mode == DetectorMode::Model;
+  if (!choice.window_model.empty () && !run_fused)
+    throw std::runtime_error ("--window-model rescores a fused model's candidates; " + choice.model +
+                              " is not run as a fused model");
+  const std::string window = !choice.window_model.empty () ? choice.window_model
+                             : run_fused                   ? loaded.model->windowPath ()
+                                                           : std::string ();
+  const float weight = choice.window_weight >= 0.f                        ? choice.window_weight
+                       : choice.window_model.empty () && !window.empty () ? loaded.model->settings ().window_weight
+                                                                          : BodyPartDetector<pcl::PointXYZ>::kDefaultWindowWeight;
+  if (window.empty () && choice.window_weight > 0.f)
+    throw std::runtime_error ("--window-weight needs a window model: " + choice.model +
+                              (run_fused ? " names none (give --window-model)" : " is not run as a fused model"));
+  if (!window.empty () && weight > 0.f)
+  {
+    loaded.window_model = loadWindowModel (window, *loaded.model, choice.window_model.empty () ? choice.model : "");
+    loaded.window_weight = weight;
+    loaded.files.push_back (window);
+    loaded.window_file = window;
+  }
   if (!parseForestInput (choice.forest_input, loaded.forest_parts.input))
     throw std::runtime_error ("--forest-input must be automatic, persons or meshes, not '" + choice.forest_input + "'");
   if (!parsePartProposals (choice.forest_parts, loaded.forest_parts.proposals))

@@ -163,7 +163,8 @@ checkEvalOutputs (const EvalFlags &flags, const DatasetSelection &selection)
   InputFiles read;
   read.addTree (selection.dataset.directory ());
   for (const auto &model :
-       {flags.detector.model, flags.agex_model_path, flags.sw_model_path, flags.fused_model_path, flags.detector.forest})
+       {flags.detector.model, flags.agex_model_path, flags.sw_model_path, flags.fused_model_path, flags.detector.forest,
+        flags.detector.window_model})
     if (!model.empty ())
       std::filesystem::is_directory (model) ? read.addTree (model) : read.add (model);
   if (!flags.json_path.empty ())

@@ -262,7 +262,7 @@ reportDetection (const DetectionTally &tally, const nlohmann::json &about, const
 
 /** The keys of a detect report that say what was evaluated how: equal in every share. */
 const char *const kRunKeys[] = {"dataset", "model", "detector_mode", "forest", "radius_m", "min_iou",
-                                "cascade_min_confidence", "cascade_miss_rate", "tip_radius", "tip_min_confidence"};
+                                "cascade_min_confidence", "cascade_miss_rate", "tip_radius", "tip_min_confidence", "window_model", "window_weight"};
 }  // namespace
 
 int
@@ -274,9 +274,11 @@ evaluateDetection (const DatasetSelection &selection, const LoadedDetector &load
                           {"cascade_min_confidence", loaded.cascade_min_confidence},
                           {"cascade_miss_rate", loaded.cascade_miss_rate},
                           {"tip_radius", loaded.tip_refinement.radius},
-                          {"tip_min_confidence", loaded.tip_refinement.min_relative_confidence}};
-  if (loaded.files.size () > 1)
-    about["forest"] = loaded.files.back ();
+                          {"tip_min_confidence", loaded.tip_refinement.min_relative_confidence},
+                          {"window_model", loaded.window_file},
+                          {"window_weight", loaded.window_model ? loaded.window_weight : 0.f}};
+  if (!loaded.forest_file.empty ())
+    about["forest"] = loaded.forest_file;
   if (loaded.mode == DetectorMode::Forest)
   {
     about["forest_input"] = forestInputName (loaded.forest_parts.input);
@@ -369,7 +371,7 @@ mergeDetectionEvaluations (const std::vector<std::string> &parts, const std::str
       radius = doc.contains ("radius_m") && doc["radius_m"].is_number () ? doc["radius_m"].get<float> () : 0.f;
     }
     else if (n != count || run != about)
-      throw std::runtime_error (path + ": a shard of another run (shard count, dataset, model, mode or radius differ "
+      throw std::runtime_error (path + ": a shard of another run (shard count, dataset, model, mode, radius or a detector setting differ "
                                        "from " + by_index.begin ()->second.first + "'s)");
     if (index < 0 || index >= n)
       throw std::runtime_error (path + ": shard " + std::to_string (index) + " of " + std::to_string (n) + "?");
@@ -500,6 +502,9 @@ compareDetectors (const DatasetSelection &selection, const std::string &agex_mod
   {
     doc["fused"] = fused_side.report ();
     doc["fused"]["model"] = fused_model_path;
+    // The fused model as it ships: with the window model it names blended in, if any.
+    doc["fused"]["window_model"] = fused_detector->getWindowModel () ? fused_detector->getModel ()->windowPath () : "";
+    doc["fused"]["window_weight"] = fused_detector->getWindowModel () ? fused_detector->getWindowWeight () : 0.f;
   }
   for (int c = 0; c < agex::kBodyPartCount; ++c)
   {
@@ -620,7 +625,7 @@ evaluatePartLabels (const DatasetSelection &selection, const LoadedDetector &loa
   }
   nlohmann::json doc = evaluation.report ();
   doc["dataset"] = selection.dataset.directory ();
-  doc["forest"] = loaded.files.back ();
+  doc["forest"] = loaded.forest_file;
   doc["forest_stride"] = loaded.forest_stride;
   doc["labels"] = selection.dataset.hasPartLabels () ? "exact (part-label images)" : "weak (from the tips and bases)";
   doc["labelling_ms_per_frame_median"] = medianMs (frame_ms);

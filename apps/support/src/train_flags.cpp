@@ -4,6 +4,7 @@
 
 #include <agex/apps/command_line.h>
 #include <agex/apps/dataset_selection.h>
+#include <agex/detection/body_part_detector.h>
 #include <agex/apps/pipeline_flags.h>
 #include <agex/io/atomic_file.h>
 
@@ -94,6 +95,8 @@ checkCascadeModel (const TrainFlags &flags)
     {
       (*doc)["fused"].erase ("forest");
       (*doc)["fused"].erase ("forest_bytes");
+      (*doc)["fused"].erase ("window");  // the detector's, not the examples'
+      (*doc)["fused"].erase ("window_weight");
     }
   if (a != b)
   {
@@ -113,7 +116,8 @@ parseTrainFlags (int argc, char **argv, TrainFlags &flags)
   PatchClassifierParams &classifier_params = flags.classifier_params;
   TrainingChoice &choice = flags.choice;
   std::vector<std::string> vector_flags, dataset_forests;
-  std::string forest_path;
+  std::string forest_path, window_path;
+  float window_weight = -1.f;  // not given
   bool sliding_window = false, fused = false;
 
   po::options_description general ("agex_train --dataset DIR[@SEQ,...] [--dataset ...] --out MODEL [options]\n"
@@ -167,7 +171,13 @@ parseTrainFlags (int argc, char **argv, TrainFlags &flags)
     ("forest-stride", po::value (&settings.forest_stride)->default_value (settings.forest_stride),
      "pixel stride of the forest pass (stored in the model; 0: by the focal length, 1 at 144x176, 2 at 640x480)")
     ("merge-radius", po::value (&settings.fused.merge_radius)->default_value (settings.fused.merge_radius, "0.03"),
-     "metres within which candidates are one (stored in the model)");
+     "metres within which candidates are one (stored in the model)")
+    ("window-model", po::value (&window_path),
+     "a sliding-window model whose confidences the detector blends into the candidates' (stored in the model "
+     "relative to it; it may still be training: the detector loads it)")
+    ("window-weight", po::value (&window_weight),
+     "with --window-model: each class's confidence is (1 - w) fused + w window, w in [0, 1] (default 0.3; stored "
+     "in the model)");
   po::options_description all;
   all.add (general).add (baseline).add (fusion).add (pipelineOptionsDescription (settings.pipeline, vector_flags));
 
@@ -182,6 +192,21 @@ parseTrainFlags (int argc, char **argv, TrainFlags &flags)
     throw std::runtime_error ("--fused needs --forest, and --forest is for --fused");
   choice.kind = settings.kind = sliding_window ? DetectorKind::SlidingWindow
                                                : fused ? DetectorKind::Fused : DetectorKind::Agex;
+  if (!window_path.empty () && !fused)
+    throw std::runtime_error ("--window-model is for --fused");
+  if (window_path.empty () && window_weight != -1.f)
+    throw std::runtime_error ("--window-weight is for --window-model");
+  if (!window_path.empty ())
+  {
+    settings.window_weight = window_weight == -1.f ? BodyPartDetector<pcl::PointXYZ>::kDefaultWindowWeight : window_weight;
+    if (!(settings.window_weight >= 0.f && settings.window_weight <= 1.f))
+      throw std::runtime_error ("--window-weight must lie in [0, 1]");
+    if (fs::absolute (window_path).lexically_normal () == fs::absolute (flags.out).lexically_normal ())
+      throw std::runtime_error ("--window-model " + window_path + " is --out: the fused model would replace it");
+    settings.window_file = fs::relative (fs::absolute (window_path), fs::absolute (flags.out).parent_path ()).string ();
+  }
+  else
+    settings.window_weight = 0.f;
   if (fused)
     loadForests (forest_path, dataset_forests, flags);
   else if (!dataset_forests.empty ())
@@ -197,13 +222,25 @@ parseTrainFlags (int argc, char **argv, TrainFlags &flags)
     read.addTree (selectDataset (spec, false).dataset.directory ());
   if (!forest_path.empty ())
     read.add (forest_path);
+  if (!window_path.empty ())
+    read.add (window_path);
   if (!flags.cascade_for.empty ())
     read.add (flags.cascade_for);
   for (const auto &pair : dataset_forests)
     read.add (pair.substr (pair.rfind ('=') + 1));
   checkOutputPath (flags.out, OutputKind::Model, read);
   if (!flags.cascade_for.empty ())
+  {
     checkCascadeModel (flags);
+    // The model keeps its window model (named relative to --out now) unless --window-model is given.
+    const DetectorModel model = DetectorModel::load (flags.cascade_for);
+    if (window_path.empty () && !model.windowPath ().empty ())
+    {
+      settings.window_file =
+          fs::relative (fs::absolute (model.windowPath ()), fs::absolute (flags.out).parent_path ()).string ();
+      settings.window_weight = model.settings ().window_weight;
+    }
+  }
   classifier_params.dictionary.seed = choice.seed;
   return true;
 }

@@ -112,9 +112,12 @@ withFittedCascade (const DetectorModel &model, const std::string &path, const De
     throw std::runtime_error ("--cascade-for " + path + ": no cascade fits it (no stage end below its " +
                               std::to_string (classifier->params ().weak_count) + " rounds)");
   // The model's settings, with its forest named relative to --out (parseTrainFlags checked
-  // that it is the forest the model was trained with).
+  // that it is the forest the model was trained with), and its window model as parseTrainFlags
+  // resolved it (the model's own, or --window-model's).
   DetectorSettings kept = model.settings ();
   kept.forest_file = settings.forest_file;
+  kept.window_file = settings.window_file;
+  kept.window_weight = settings.window_file.empty () ? 0.f : settings.window_weight;
   return DetectorModel (classifier, kept);
 }
 }  // namespace apps

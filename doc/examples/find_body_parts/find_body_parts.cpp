@@ -9,7 +9,7 @@
 // FRAME is a depth frame (.png, .u16 or organized .pcd), AGEX_MODEL an AGEX-point model such
 // as <prefix>/share/agex/models/agex_bonn_agex.yml (steps 5-6 use its classifier by hand),
 // DETECTOR_MODEL the detector of step 7 (<prefix>/share/agex/models/agex_bonn.yml, the fused
-// detector with its forest beside it). With PICTURES_DIR, one PNG per step is written there.
+// detector with its forest and sliding-window model beside it). With PICTURES_DIR, one PNG per step is written there.
 
 #include <agex/classification/patch_classifier.h>
 #include <agex/detection/body_part_detector.h>

@@ -100,6 +100,22 @@ check "--tip-radius 0.6" 1 "--tip-radius must lie in \\[0, 0.5\\] metres" \
   $D in/frame_b.png --tip-radius 0.6
 check "--tip-min-confidence 0" 1 "--tip-min-confidence must lie in \\(0, 1\\]" \
   $D in/frame_b.png --tip-min-confidence 0
+check "--window-weight 1.5" 1 "--window-weight must lie in \\[0, 1\\]" \
+  $D in/frame_b.png --window-weight 1.5
+check "--window-model of a fused model (not a sliding window)" 1 "is a fused model, but a sliding-window model is needed here" \
+  $D in/frame_b.png --window-model in/model.yml
+check "--window-model that is missing" 1 "in/no_such_sw.yml: model file not found" \
+  $D in/frame_b.png --window-model in/no_such_sw.yml
+check "--window-model with an AGEX-point model" 1 "--window-model rescores a fused model's candidates" \
+  $D in/frame_b.png --model in/agex_model.yml --window-model in/agex_bonn_sw.yml
+check "--window-weight without a window model" 1 "--window-weight needs a window model" \
+  $D in/frame_b.png --model in/agex_model.yml --window-weight 0.5
+check "agex_train --window-model without --fused" 1 "--window-model is for --fused" \
+  $T --dataset in/dataset --out out/sw_window.yml --window-model in/agex_bonn_sw.yml
+check "agex_train --window-weight without --window-model" 1 "--window-weight is for --window-model" \
+  $T --dataset in/dataset --fused --forest in/agex_bonn_forest.agexforest --window-weight 0.5 --out out/fw.yml
+check "agex_train --fused --window-model MODEL --out MODEL" 1 "is --out: the fused model would replace it" \
+  $T --dataset in/dataset --fused --forest in/agex_bonn_forest.agexforest --window-model out/fw.yml --out out/fw.yml
 check "agex_train --cascade-for a fused model with the AGEX-point flags" 1 "--cascade-for in/model.yml: a model of the fused detector, and these flags collect agex examples" \
   $T --dataset in/dataset --out out/cascade.yml --cascade-for in/model.yml
 check "agex_train --cascade-for MODEL --out MODEL (over its own input)" 1 "model.yml: output would overwrite an input file" \

@@ -60,7 +60,8 @@ public:
 
   BodyPartDetector () = default;
 
-  /** \brief A detector with the model in path (and, for a fused model, its forest).
+  /** \brief A detector with the model in path (and, for a fused model, its forest and the
+    * sliding-window model it names, if any, with its weight).
     * \throws agex::ModelError naming the file and the problem */
   static Ptr fromModel (const std::string &path);
 
@@ -124,6 +125,20 @@ public:
     tip_refinement_ = params;
   }
   const TipRefinementParams &getTipRefinement () const { return tip_refinement_; }
+
+  /** \brief Fused models: each candidate's confidences blended with a sliding-window model's
+    * at the candidate's pixel (its upright patch, that model's geometry and classifier):
+    * (1 - weight) fused + weight window, per class, before the candidate takes its most
+    * confident class. The sliding window ranks heads of unseen people better than the fused
+    * classifier (doc/results.md). nullptr or weight 0 (the default): off.
+    * \throws std::invalid_argument for a weight outside [0, 1] or a model that is no
+    *         sliding-window model */
+  void setWindowRescoring (const DetectorModel::ConstPtr &window_model, float weight);
+  /** The weight for a window model given without one (apps, Python): the best of those
+    * measured on held-out folds (doc/results.md). */
+  static constexpr float kDefaultWindowWeight = 0.3f;
+  const DetectorModel::ConstPtr &getWindowModel () const { return window_model_; }
+  float getWindowWeight () const { return window_weight_; }
 
   /** \brief How Forest mode labels and names parts (agex::ForestPartSettings; default: the
     * persons as segmented, PCL-style blobs at their extremities). A fused model keeps its
@@ -190,6 +205,8 @@ private:
   float cascade_min_confidence_ = kDefaultCascadeMinConfidence;
   float cascade_miss_rate_ = kDefaultCascadeMissRate;
   TipRefinementParams tip_refinement_;
+  DetectorModel::ConstPtr window_model_;
+  float window_weight_ = 0.f;
   ForestPartSettings forest_parts_;
   pcl::PointCloud<pcl::PointXYZ>::Ptr xyz_frame_;  ///< the input as XYZ, for other point types
   pcl::PointCloud<BodyPartLabelPoint> part_labels_;

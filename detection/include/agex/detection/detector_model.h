@@ -49,6 +49,11 @@ struct DetectorSettings
   std::string forest_file;
   std::uint64_t forest_bytes = 0;
   int forest_stride = 0;  ///< pixel stride of the forest pass, 1-8; 0: by the focal length (agex::forestStrideFor)
+  /** Fused models: a sliding-window model whose confidences blend into the candidates'
+    * (BodyPartDetector::setWindowRescoring), a path relative to the model file's directory
+    * (empty: none), and its weight in [0, 1]. The fused classifier does not depend on it. */
+  std::string window_file;
+  float window_weight = 0.f;
 
   /** \throws std::invalid_argument naming the setting (name (key)) out of range */
   void validate (const std::function<std::string (const std::string &key)> &name) const;
@@ -90,6 +95,9 @@ public:
   /** A fused model's forest as a path (its settings' forest_file resolved against the model
     * file's directory); empty for other models or a model not loaded from a file. */
   const std::string &forestPath () const { return forest_path_; }
+  /** A fused model's sliding-window model as a path (window_file resolved likewise); empty
+    * when it names none. */
+  const std::string &windowPath () const { return window_path_; }
   /** The metadata's "training" object of a loaded model (empty for a new one). */
   const nlohmann::json &training () const { return training_; }
 
@@ -98,5 +106,13 @@ private:
   DetectorSettings settings_;
   nlohmann::json training_ = nlohmann::json::object ();
   std::string forest_path_;
+  std::string window_path_;
 };
+/** \brief A fused model's sliding-window model (BodyPartDetector::setWindowRescoring): loads
+  * path and checks it is a sliding-window model of fused's classes without auxiliary features.
+  * named_by: the fused model file that names it (said in every error), empty when the user gave it.
+  * \throws agex::ModelError for a file that cannot be read, std::invalid_argument for a model
+  *         that does not fit, both naming path */
+DetectorModel::ConstPtr loadWindowModel (const std::string &path, const DetectorModel &fused,
+                                         const std::string &named_by = std::string ());
 }  // namespace agex

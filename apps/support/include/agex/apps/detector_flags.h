@@ -24,6 +24,8 @@ struct DetectorChoice
   float cascade_min_confidence = BodyPartDetector<pcl::PointXYZ>::kDefaultCascadeMinConfidence;
   float cascade_miss_rate = BodyPartDetector<pcl::PointXYZ>::kDefaultCascadeMissRate;
   TipRefinementParams tip_refinement;
+  std::string window_model;  ///< fused models: a sliding-window model whose scores blend in (empty: the model's own)
+  float window_weight = -1.f;  ///< < 0: the fused model's own weight, else BodyPartDetector::kDefaultWindowWeight
   std::string forest_input = "automatic";  ///< forest mode: automatic, persons or meshes (agex::ForestInput)
   std::string forest_parts = "blobs";    ///< forest mode: blobs or modes (agex::PartProposals)
 };
@@ -42,14 +44,18 @@ struct LoadedDetector
   float cascade_min_confidence = BodyPartDetector<pcl::PointXYZ>::kDefaultCascadeMinConfidence;
   float cascade_miss_rate = BodyPartDetector<pcl::PointXYZ>::kDefaultCascadeMissRate;
   TipRefinementParams tip_refinement;
+  DetectorModel::ConstPtr window_model;
+  float window_weight = 0.f;
   ForestPartSettings forest_parts;
   /** What names the parts: "agex", "fused", "sliding_window" (the model's kind) or "forest". */
   std::string mode_name;
 
   /** Gives detector the model, forest, mode, stride and forest-mode settings. */
   void configure (BodyPartDetector<pcl::PointXYZ> &detector) const;
-  /** The files it was loaded from (what no output may overwrite). */
+  /** The files it was loaded from (what no output may overwrite): the model first. */
   std::vector<std::string> files;
+  std::string forest_file;  ///< the forest's file or directory (empty: none)
+  std::string window_file;  ///< the window model's file (empty: none)
 };
 
 /** \brief Loads what choice names, checking the combination: an AGEX model for the agex

@@ -1,6 +1,7 @@
 #pragma once
 
 #include <agex/classification/body_part_labeling.h>
+#include <agex/classification/model_error.h>
 #include <agex/classification/non_maximum_suppression.h>
 #include <agex/classification/sliding_window_detector.h>
 #include <agex/common/statistics.h>
@@ -23,6 +24,18 @@ agex::BodyPartDetector<PointT>::fromModel (const std::string &path)
   detector->setModel (model);
   if (!model->forestPath ().empty ())
     detector->setForest (BodyPartForest::load (model->forestPath ()));
+  if (!model->windowPath ().empty () && model->settings ().window_weight > 0.f)
+  {
+    try
+    {
+      detector->setWindowRescoring (loadWindowModel (model->windowPath (), *model, path),
+                                    model->settings ().window_weight);
+    }
+    catch (const std::invalid_argument &e)
+    {
+      throw ModelError (e.what ());
+    }
+  }
   return detector;
 }
 
@@ -41,6 +54,20 @@ agex::BodyPartDetector<PointT>::setSettings (const DetectorSettings &settings)
     throw std::logic_error ("BodyPartDetector::setSettings: the detector kind must stay the model's");
   settings.validate ([] (const std::string &key) { return key; });
   settings_ = settings;
+}
+
+template <typename PointT> void
+agex::BodyPartDetector<PointT>::setWindowRescoring (const DetectorModel::ConstPtr &window_model, float weight)
+{
+  if (!(weight >= 0.f && weight <= 1.f))
+    throw std::invalid_argument ("BodyPartDetector::setWindowRescoring: weight " + std::to_string (weight) +
+                                 " outside [0, 1]");
+  if (window_model && window_model->settings ().kind != DetectorKind::SlidingWindow)
+    throw std::invalid_argument (std::string ("BodyPartDetector::setWindowRescoring: a ") +
+                                 detectorKindName (window_model->settings ().kind) +
+                                 " model, not a sliding-window model");
+  window_model_ = window_model;
+  window_weight_ = window_model ? weight : 0.f;
 }
 
 template <typename PointT> void
@@ -264,12 +291,32 @@ agex::BodyPartDetector<PointT>::classifyFused (std::vector<BodyPartDetection> &d
   const int classes = classifier.classes ();
   std::vector<float> margins (classes), confidences (classes);
   std::vector<ScoredCandidate> scored;
+  // The sliding window's view of each candidate: its upright patch at the candidate's pixel
+  // (a window model of other classes than the fused model's is not blended: loadWindowModel
+  // refuses one when loading). The soft cascade has already judged the fused confidences.
+  const bool rescore = window_model_ && window_weight_ > 0.f && window_model_->classifier ().classes () == classes;
+  std::vector<agex::DepthPatch> window_patches;
+  std::vector<float> window_margins (classes), window_confidences (classes);
+  if (rescore)
+  {
+    pcl::PointCloud<agex::InterestPoint> upright = points;
+    for (auto &p : upright)
+      p.orientation[0] = p.orientation[1] = p.orientation[2] = 0.f;
+    computePatches (prepared, upright, window_model_->patchGeometry (), window_patches);
+  }
   for (std::size_t i = 0; i < patches.size () && i < candidates.size (); ++i)
   {
     features.compute (candidates[i], aux.data ());
     if (!classifier.classifyCascade (patches[i], aux.data (), cascade_min_confidence_, margins.data (),
                                      confidences.data (), cascade_miss_rate_))
       continue;
+    if (rescore && i < window_patches.size ())
+    {
+      window_model_->classifier ().classify (window_patches[i], window_margins.data (), window_confidences.data ());
+      for (int k = 0; k < classes; ++k)
+        confidences[static_cast<std::size_t> (k)] = (1.f - window_weight_) * confidences[static_cast<std::size_t> (k)] +
+                                                    window_weight_ * window_confidences[static_cast<std::size_t> (k)];
+    }
     const int best = static_cast<int> (std::max_element (confidences.begin (), confidences.end ()) - confidences.begin ());
     const FusedCandidate &c = candidates[i];
     BodyPartDetection d;

@@ -13,6 +13,7 @@
 #include <pcl/common/io.h>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <type_traits>
 
@@ -291,38 +292,16 @@ agex::BodyPartDetector<PointT>::classifyFused (std::vector<BodyPartDetection> &d
   const int classes = classifier.classes ();
   std::vector<float> margins (classes), confidences (classes);
   std::vector<ScoredCandidate> scored;
-  // The sliding window's view of each candidate: its upright patch at the candidate's pixel
-  // (a window model of other classes than the fused model's is not blended: loadWindowModel
-  // refuses one when loading). The soft cascade has already judged the fused confidences.
-  const bool rescore = window_model_ && window_weight_ > 0.f && window_model_->classifier ().classes () == classes;
-  std::vector<agex::DepthPatch> window_patches;
-  std::vector<float> window_margins (classes), window_confidences (classes);
-  if (rescore)
-  {
-    pcl::PointCloud<agex::InterestPoint> upright = points;
-    for (auto &p : upright)
-      p.orientation[0] = p.orientation[1] = p.orientation[2] = 0.f;
-    computePatches (prepared, upright, window_model_->patchGeometry (), window_patches);
-  }
+  std::vector<std::array<float, kBodyPartCount>> kept_margins;
+  std::vector<std::size_t> kept;  // the candidates the cascade kept, in scored's order
   for (std::size_t i = 0; i < patches.size () && i < candidates.size (); ++i)
   {
     features.compute (candidates[i], aux.data ());
     if (!classifier.classifyCascade (patches[i], aux.data (), cascade_min_confidence_, margins.data (),
                                      confidences.data (), cascade_miss_rate_))
       continue;
-    if (rescore && i < window_patches.size ())
-    {
-      window_model_->classifier ().classify (window_patches[i], window_margins.data (), window_confidences.data ());
-      for (int k = 0; k < classes; ++k)
-        confidences[static_cast<std::size_t> (k)] = (1.f - window_weight_) * confidences[static_cast<std::size_t> (k)] +
-                                                    window_weight_ * window_confidences[static_cast<std::size_t> (k)];
-    }
-    const int best = static_cast<int> (std::max_element (confidences.begin (), confidences.end ()) - confidences.begin ());
     const FusedCandidate &c = candidates[i];
     BodyPartDetection d;
-    d.part = static_cast<BodyPart> (best);
-    d.confidence = confidences[best];
-    d.margin = margins[best];
     d.position = c.position;
     d.orientation = c.orientation;
     d.u = width > 0 ? c.index % width : 0;
@@ -331,10 +310,49 @@ agex::BodyPartDetector<PointT>::classifyFused (std::vector<BodyPartDetection> &d
     d.mesh = features.meshOf (c);  // a part mode's pixel has one too (the refinement needs it)
     ScoredCandidate s;
     s.detection = d;
+    std::array<float, kBodyPartCount> m{};
     for (int k = 0; k < classes && k < kBodyPartCount; ++k)
+    {
       s.confidences[static_cast<std::size_t> (k)] = confidences[static_cast<std::size_t> (k)];
+      m[static_cast<std::size_t> (k)] = margins[static_cast<std::size_t> (k)];
+    }
     s.geodesic_distance = c.agex_rank > 0 ? c.geodesic_distance : 0.f;
     scored.push_back (s);
+    kept_margins.push_back (m);
+    kept.push_back (i);
+  }
+  // The sliding window's view of each candidate the cascade kept: its upright patch at the
+  // candidate's pixel (a window model of other classes than the fused model's is not blended:
+  // loadWindowModel refuses one when loading).
+  if (window_model_ && window_weight_ > 0.f && window_model_->classifier ().classes () == classes && !kept.empty ())
+  {
+    pcl::PointCloud<agex::InterestPoint> upright;
+    for (const std::size_t i : kept)
+    {
+      upright.push_back (points[i]);
+      upright.back ().orientation[0] = upright.back ().orientation[1] = upright.back ().orientation[2] = 0.f;
+    }
+    std::vector<agex::DepthPatch> window_patches;
+    computePatches (prepared, upright, window_model_->patchGeometry (), window_patches);
+    std::vector<float> window_margins (classes), window_confidences (classes);
+    for (std::size_t j = 0; j < window_patches.size () && j < scored.size (); ++j)
+    {
+      window_model_->classifier ().classify (window_patches[j], window_margins.data (), window_confidences.data ());
+      for (int k = 0; k < classes && k < kBodyPartCount; ++k)
+      {
+        float &confidence = scored[j].confidences[static_cast<std::size_t> (k)];
+        confidence = (1.f - window_weight_) * confidence + window_weight_ * window_confidences[static_cast<std::size_t> (k)];
+      }
+    }
+  }
+  for (std::size_t j = 0; j < scored.size (); ++j)
+  {
+    const auto &conf = scored[j].confidences;
+    const int best = static_cast<int> (std::max_element (conf.begin (), conf.begin () + std::min (classes, kBodyPartCount)) -
+                                       conf.begin ());
+    scored[j].detection.part = static_cast<BodyPart> (best);
+    scored[j].detection.confidence = conf[static_cast<std::size_t> (best)];
+    scored[j].detection.margin = kept_margins[j][static_cast<std::size_t> (best)];
   }
   patches_classified_ = std::min (patches.size (), candidates.size ());
   std::vector<BodyPartDetection> named = refineToTips (scored, tip_refinement_);

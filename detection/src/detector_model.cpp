@@ -288,6 +288,28 @@ loadWindowModel (const std::string &path, const DetectorModel &fused, const std:
   return window;
 }
 
+WindowChoice
+chooseWindowModel (const DetectorModel &model, const std::string &model_file, bool run_fused,
+                   const std::string &given_path, float given_weight, float default_weight,
+                   const std::string &path_option, const std::string &weight_option)
+{
+  if (!given_path.empty () && !run_fused)
+    throw std::invalid_argument (path_option + " rescores a fused model's candidates; " + model_file +
+                                 " is not run as a fused model");
+  WindowChoice choice;
+  choice.own = given_path.empty ();
+  choice.path = !given_path.empty () ? given_path : run_fused ? model.windowPath () : std::string ();
+  if (choice.path.empty () && given_weight > 0.f)
+    throw std::invalid_argument (weight_option + " needs a window model: " + model_file +
+                                 (run_fused ? " names none (give " + path_option + ")" : " is not run as a fused model"));
+  choice.weight = given_weight >= 0.f              ? given_weight
+                  : choice.own && !choice.path.empty () ? model.settings ().window_weight
+                                                        : default_weight;
+  if (!(choice.weight > 0.f))
+    choice.path.clear ();
+  return choice;
+}
+
 void
 DetectorModel::requireKind (DetectorKind expected, const std::string &path) const
 {

@@ -431,24 +431,15 @@ public:
       forest_ = agex::BodyPartForest::load (forest_path);
     forest_path_ = forest_path;
     // As agex_detect's --window-model and --window-weight: a fused model's own by default.
-    const bool fused = model_->settings ().kind == agex::DetectorKind::Fused && mode_ == agex::DetectorMode::Model;
-    if (window_model && !fused)
-      throw std::invalid_argument ("window_model rescores a fused model's candidates; " + model_path +
-                                   " is not run as a fused model");
-    const std::string window = window_model ? window_model_path
-                               : fused      ? model_->windowPath ()
-                                            : std::string ();
-    if (window.empty () && window_weight && *window_weight > 0.f)
-      throw std::invalid_argument ("window_weight needs a window model: " + model_path +
-                                   (fused ? " names none (give window_model)" : " is not run as a fused model"));
-    const float weight = window_weight                          ? *window_weight
-                         : !window_model && !window.empty () ? model_->settings ().window_weight
-                                                               : agex::BodyPartDetector<pcl::PointXYZ>::kDefaultWindowWeight;
-    if (!window.empty () && weight > 0.f)
+    const agex::WindowChoice window = agex::chooseWindowModel (
+        *model_, model_path, model_->settings ().kind == agex::DetectorKind::Fused && mode_ == agex::DetectorMode::Model,
+        window_model_path, window_weight ? *window_weight : -1.f,
+        agex::BodyPartDetector<pcl::PointXYZ>::kDefaultWindowWeight, "window_model", "window_weight");
+    if (!window.path.empty ())
     {
-      window_model_ = agex::loadWindowModel (window, *model_, window_model ? std::string () : model_path);
-      window_weight_ = weight;
-      window_path_ = window;
+      window_model_ = agex::loadWindowModel (window.path, *model_, window.own ? model_path : std::string ());
+      window_weight_ = window.weight;
+      window_path_ = window.path;
     }
   }
 

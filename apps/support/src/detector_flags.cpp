@@ -135,25 +135,24 @@ loadDetector (const DetectorChoice &choice, DetectorKind kind)
   loaded.cascade_min_confidence = choice.cascade_min_confidence;
   loaded.cascade_miss_rate = choice.cascade_miss_rate;
   loaded.tip_refinement = choice.tip_refinement;
-  const bool run_fused = model_kind == DetectorKind::Fused && loaded.mode == DetectorMode::Model;
-  if (!choice.window_model.empty () && !run_fused)
-    throw std::runtime_error ("--window-model rescores a fused model's candidates; " + choice.model +
-                              " is not run as a fused model");
-  const std::string window = !choice.window_model.empty () ? choice.window_model
-                             : run_fused                   ? loaded.model->windowPath ()
-                                                           : std::string ();
-  const float weight = choice.window_weight >= 0.f                        ? choice.window_weight
-                       : choice.window_model.empty () && !window.empty () ? loaded.model->settings ().window_weight
-                                                                          : BodyPartDetector<pcl::PointXYZ>::kDefaultWindowWeight;
-  if (window.empty () && choice.window_weight > 0.f)
-    throw std::runtime_error ("--window-weight needs a window model: " + choice.model +
-                              (run_fused ? " names none (give --window-model)" : " is not run as a fused model"));
-  if (!window.empty () && weight > 0.f)
+  WindowChoice window;
+  try
   {
-    loaded.window_model = loadWindowModel (window, *loaded.model, choice.window_model.empty () ? choice.model : "");
-    loaded.window_weight = weight;
-    loaded.files.push_back (window);
-    loaded.window_file = window;
+    window = chooseWindowModel (*loaded.model, choice.model,
+                                model_kind == DetectorKind::Fused && loaded.mode == DetectorMode::Model,
+                                choice.window_model, choice.window_weight,
+                                BodyPartDetector<pcl::PointXYZ>::kDefaultWindowWeight, "--window-model", "--window-weight");
+  }
+  catch (const std::invalid_argument &e)
+  {
+    throw std::runtime_error (e.what ());  // a combination of flags, as the other flag errors here
+  }
+  if (!window.path.empty ())
+  {
+    loaded.window_model = loadWindowModel (window.path, *loaded.model, window.own ? choice.model : "");
+    loaded.window_weight = window.weight;
+    loaded.files.push_back (window.path);
+    loaded.window_file = window.path;
   }
   if (!parseForestInput (choice.forest_input, loaded.forest_parts.input))
     throw std::runtime_error ("--forest-input must be automatic, persons or meshes, not '" + choice.forest_input + "'");

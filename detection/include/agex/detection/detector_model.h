@@ -115,4 +115,21 @@ private:
   *         that does not fit, both naming path */
 DetectorModel::ConstPtr loadWindowModel (const std::string &path, const DetectorModel &fused,
                                          const std::string &named_by = std::string ());
+
+/** The window model a detector runs with, as the apps and the Python module choose it. */
+struct WindowChoice
+{
+  std::string path;    ///< empty: none (or weight 0)
+  float weight = 0.f;
+  bool own = false;    ///< the model names it (not given by the user)
+};
+/** \brief The given window model (given_path) or, when none is given, the one model_file's
+  * model names if it runs as a fused model (run_fused); the given weight (< 0: not given) or
+  * else the model's own weight for its own window, BodyPartDetector's default for a given one.
+  * path_option and weight_option name the settings in errors (e.g. "--window-model").
+  * \throws std::invalid_argument for a window model given to a model not run as fused, or a
+  *         positive weight without any window model */
+WindowChoice chooseWindowModel (const DetectorModel &model, const std::string &model_file, bool run_fused,
+                                const std::string &given_path, float given_weight, float default_weight,
+                                const std::string &path_option, const std::string &weight_option);
 }  // namespace agex
